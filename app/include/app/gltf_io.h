@@ -1,0 +1,46 @@
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "splat/gaussians.h"
+
+namespace app {
+
+// One glTF POINTS primitive carrying KHR_gaussian_splatting attributes, decoded to floats
+// (normalized integer accessors mapped to [-1, 1] / [0, 1] as glTF defines) and moved to the
+// world frame by its node's transform.
+struct GltfSplatPrimitive {
+  std::string name;                 // node name, else mesh name
+  std::vector<float> positions;     // [N, 3]
+  std::vector<float> rotations_xyzw;  // [N, 4] as stored: x, y, z, w
+  std::vector<float> log_scales;    // [N, 3] KHR SCALE is log-space
+  std::vector<float> opacities;     // [N] in [0, 1]
+  std::vector<float> sh;            // [N, K, 3]
+  int sh_degree = 0;
+  std::string kernel;       // as stored; unknown kernels fall back to "ellipse"
+  std::string color_space;  // as stored; unknown ones are treated as srgb_rec709_display
+  bool sh_from_color0 = false;  // no SH_DEGREE_0 attribute: DC derived from COLOR_0
+};
+
+struct GltfSplatScene {
+  std::vector<GltfSplatPrimitive> primitives;
+  std::vector<std::string> notices;  // fallbacks taken (unknown kernel, colour space, ...)
+};
+
+// Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file. Throws splat::Error
+// naming the file and the element for unreadable files, missing or malformed attributes,
+// partially defined SH degrees, non-similarity node transforms and NaN/Inf values.
+GltfSplatScene read_gltf_splats(const std::filesystem::path& path);
+
+// Merges the primitives into one map (highest SH degree; missing coefficients are zero).
+// Opacities are clamped to [1e-6, 1 - 1e-6] before the logit so 0 and 1 stay finite.
+splat::Gaussians to_gaussians(const GltfSplatScene& scene);
+
+// Writes the map as a .glb (or .gltf with embedded buffers, by extension) with one POINTS
+// primitive: POSITION, KHR_gaussian_splatting ROTATION (unit, xyzw), SCALE (log), OPACITY,
+// SH_DEGREE_l_COEF_n for every degree of the map, and COLOR_0 (diffuse colour and opacity)
+// for viewers without the extension. Coordinates are written as they are (no axis change).
+void write_gltf(const std::filesystem::path& path, const splat::Gaussians& gaussians);
+
+}  // namespace app

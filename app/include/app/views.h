@@ -1,0 +1,37 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "splat/camera.h"
+#include "splat/gaussians.h"
+
+namespace app {
+
+// Robust extent of a map: median of the means and the 90th percentile of the distances to it,
+// so a few stray splats far away do not move the camera.
+struct MapExtent {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0;
+};
+MapExtent map_extent(const splat::Gaussians& gaussians);
+
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  int width = 0, height = 0;
+};
+// Parses "fx,fy,cx,cy,W,H". Throws splat::Error naming the text for anything else.
+Intrinsics parse_intrinsics(const std::string& text);
+// Parses "WxH" (for example 640x480).
+std::pair<int, int> parse_size(const std::string& text);
+
+// n cameras on a circle around the map's centre at 2.5 map radii, 25 degrees above the plane
+// normal to `up`, each looking at the centre; fx = fy = 0.8 * width (a ~64 degree view).
+std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
+                                         const Eigen::Vector3d& up);
+
+// Camera at `T_world_cam` with the given intrinsics.
+splat::Camera make_camera(const Intrinsics& k, const Eigen::Isometry3d& T_world_cam);
+
+}  // namespace app

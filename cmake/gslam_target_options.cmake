@@ -1,0 +1,23 @@
+# One place that sets language level, warnings, tuning and sanitizers on every gslam target.
+function(gslam_target_options target)
+  target_compile_features(${target} PUBLIC cxx_std_20)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wconversion -Wno-sign-conversion)
+  if(GSLAM_WARNINGS_AS_ERRORS)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(GSLAM_NATIVE_ARCH)
+    # Every target gets the same -march: Eigen's alignment must agree across translation units.
+    target_compile_options(${target} PRIVATE -march=native)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+      # GCC 12 false positive inside Eigen's AVX-512 code (_mm512_undefined_* operands).
+      target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized)
+    endif()
+  endif()
+  # Lets `#pragma omp simd` loops call the vectorised libm (libmvec) without OpenMP threads.
+  target_compile_options(${target} PRIVATE -fopenmp-simd -fno-math-errno)
+  if(GSLAM_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=${GSLAM_SANITIZE} -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=all)
+    target_link_options(${target} PRIVATE -fsanitize=${GSLAM_SANITIZE})
+  endif()
+endfunction()

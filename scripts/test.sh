@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Sets up a fresh Debian 12 machine, builds gslam with its tests and runs the whole suite.
+# With --sanitize, builds into build-asan/ with AddressSanitizer + UBSan and runs it there.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install_deps.sh
+if [ "${1:-}" = "--sanitize" ]; then
+  export GSLAM_BUILD_DIR=build-asan
+  scripts/build.sh -DGSLAM_SANITIZE=address,undefined -DGSLAM_BUILD_BENCHMARKS=OFF
+else
+  scripts/build.sh
+fi
+ctest --test-dir "${GSLAM_BUILD_DIR:-build}" --output-on-failure --timeout 600 -j "$(nproc)"

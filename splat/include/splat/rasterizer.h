@@ -1,0 +1,111 @@
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "splat/camera.h"
+#include "splat/gaussians.h"
+
+namespace splat {
+
+struct RenderSettings {
+  std::array<float, 3> background{0.f, 0.f, 0.f};  // RGB behind the splats
+  // Highest SH degree evaluated; -1 uses the map's. Lower values ignore the extra coefficients.
+  int sh_degree = -1;
+  // Backward: propagate the gradient through the SH view direction (mean - camera centre) to
+  // the means and the pose. This is the exact derivative. false treats the direction as a
+  // constant, as gsplat's rasterization() does (its golden gradients are made that way).
+  bool sh_direction_gradient = true;
+};
+
+// Counts of what the projection stage did, for logs and tests.
+struct RenderStats {
+  std::size_t visible = 0;            // splats that reached at least one tile
+  std::size_t culled_depth = 0;       // behind the near plane or past the far plane
+  std::size_t culled_degenerate = 0;  // zero quaternion or singular 2D covariance
+  std::size_t culled_faint = 0;       // opacity below kAlphaMin
+  std::size_t culled_offscreen = 0;   // extent box entirely outside the image
+  std::size_t intersections = 0;      // (splat, tile) pairs composited
+};
+
+// Everything the forward pass produced. Images are [H, W, C] row-major. The intermediate
+// buffers are exposed so a mismatch between backends can be traced to one stage.
+template <typename Scalar>
+struct ForwardResultT {
+  int width = 0, height = 0;
+  std::vector<Scalar> rgb;    // [H, W, 3] composited over RenderSettings::background
+  std::vector<Scalar> alpha;  // [H, W] silhouette, 1 - final transmittance
+  std::vector<Scalar> depth;  // [H, W] sum of blend weight x camera z (expected depth x alpha)
+  std::vector<Scalar> depth_normalized;  // [H, W] depth / alpha where alpha > 0, else 0; metres
+
+  // Per Gaussian, [N, ...]; radii == 0 on both axes means culled.
+  std::vector<Scalar> means2d;   // [N, 2] pixels
+  std::vector<Scalar> conics;    // [N, 3] inverse 2D covariance (a, b, c) = [[a, b], [b, c]]
+  std::vector<Scalar> depths;    // [N] camera z
+  std::vector<int32_t> radii;    // [N, 2] screen extent in pixels along x and y
+  std::vector<Scalar> colors;    // [N, 3] SH colour for this view, max(SH + 0.5, 0)
+  std::vector<Scalar> opacities; // [N] sigmoid(logit)
+
+  // Tiles: ranges into sorted_ids, [T, 2] begin/end, tiles row-major (tile_y * tiles_x + tile_x).
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<uint32_t> tile_ranges;
+  std::vector<uint32_t> sorted_ids;  // Gaussian index of each intersection, by (tile, depth)
+  // Per pixel: one past the last sorted position that contributed, and the final transmittance.
+  std::vector<uint32_t> last_contributor;    // [H, W]
+  std::vector<Scalar> final_transmittance;   // [H, W]
+
+  RenderStats stats;
+
+  // Inputs, kept for the backward pass. The Gaussians viewed must outlive this result.
+  GaussiansViewT<Scalar> gaussians;
+  Camera camera;
+  RenderSettings settings;
+};
+using ForwardResult = ForwardResultT<float>;
+
+// Upstream gradients dL/d(output image). An empty vector means zero for that output.
+template <typename Scalar>
+struct ImageGradsT {
+  std::vector<Scalar> rgb;    // [H, W, 3]
+  std::vector<Scalar> alpha;  // [H, W]
+  std::vector<Scalar> depth;  // [H, W], with respect to ForwardResult::depth (not normalized)
+};
+using ImageGrads = ImageGradsT<float>;
+
+// Pose gradient for the left perturbation T_cam_world <- exp(delta) * T_cam_world,
+// delta = [v, omega] (translation first), as in ../STYLE.md.
+using PoseGradient = Eigen::Matrix<double, 6, 1>;
+
+template <typename Scalar>
+struct BackwardResultT {
+  GaussianGradsT<Scalar> d_gaussians;  // mirrors the input map, field for field
+  PoseGradient d_loss_d_pose = PoseGradient::Zero();
+  // What densification needs: dL/d(2D mean) per Gaussian [N, 2] and whether it was visible [N].
+  std::vector<Scalar> d_means2d;
+  std::vector<uint8_t> visible;
+};
+using BackwardResult = BackwardResultT<float>;
+
+// The differentiable tile rasterizer. Backends differ in where they run, never in the maths.
+class Rasterizer {
+ public:
+  virtual ~Rasterizer() = default;
+  virtual std::string name() const = 0;
+  // Renders the map. Throws splat::Error for invalid sizes, non-finite values or a bad camera.
+  virtual ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
+                                const RenderSettings& settings) = 0;
+  // Gradients of a loss given its gradients with respect to the forward outputs.
+  // Throws splat::Error if the image gradients do not match the forward result's size.
+  virtual BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) = 0;
+};
+
+struct CpuOptions {
+  int threads = 0;  // 0 = all hardware threads
+};
+std::unique_ptr<Rasterizer> make_cpu_rasterizer(const CpuOptions& options = {});
+
+}  // namespace splat

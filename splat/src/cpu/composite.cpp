@@ -1,0 +1,289 @@
+// Front-to-back alpha compositing per 16x16 tile, and its backward pass. Within a tile the loop
+// runs splat by splat over the tile's pixels, so the pixel loop vectorizes.
+#include <algorithm>
+#include <cmath>
+
+#include "cpu/stages.h"
+#include "shader_io.h"
+
+namespace splat::cpu {
+namespace {
+
+constexpr int kTile = static_cast<int>(io::kTileSize);
+constexpr int kTilePixels = kTile * kTile;
+
+// One splat's screen parameters, gathered so the pixel loop reads registers only.
+template <typename T>
+struct Splat {
+  T mx, my;       // 2D mean, pixels
+  T ca, cb, cc;   // conic
+  T opacity;
+  T r, g, b, z;   // colour and camera depth
+};
+
+template <typename T>
+Splat<T> load_splat(const ForwardResultT<T>& f, uint32_t id) {
+  return {f.means2d[id * 2],      f.means2d[id * 2 + 1], f.conics[id * 3], f.conics[id * 3 + 1],
+          f.conics[id * 3 + 2],   f.opacities[id],       f.colors[id * 3], f.colors[id * 3 + 1],
+          f.colors[id * 3 + 2],   f.depths[id]};
+}
+
+// Tile-local pixel rectangle [x0, x1) x [y0, y1) worth evaluating for a splat: its extent box
+// grown by one pixel. Outside the extent box alpha < kAlphaMin analytically (the extent is
+// where opacity * exp(-sigma) reaches kAlphaMin), so this equals evaluating the whole tile;
+// the one-pixel margin keeps rounding at the box edge from changing any pixel.
+struct PixelRect {
+  int x0, y0, x1, y1;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
+
+template <typename T>
+PixelRect splat_rect(const ForwardResultT<T>& f, uint32_t id, int tile_x0, int tile_y0) {
+  const T mx = f.means2d[id * 2] - T(tile_x0), my = f.means2d[id * 2 + 1] - T(tile_y0);
+  const T rx = T(f.radii[id * 2] + 1), ry = T(f.radii[id * 2 + 1] + 1);
+  // Pixel x (centre x + 0.5) is inside when mx - rx <= x + 0.5 <= mx + rx.
+  auto lo = [](T v) { return static_cast<int>(std::clamp(std::ceil(v - T(0.5)), T(0), T(kTile))); };
+  auto hi = [](T v) {
+    return static_cast<int>(std::clamp(std::floor(v - T(0.5)) + 1, T(0), T(kTile)));
+  };
+  return {lo(mx - rx), lo(my - ry), hi(mx + rx), hi(my + ry)};
+}
+
+// Per-pixel evaluation shared by forward and backward: offset, Mahalanobis term and alpha.
+template <typename T>
+struct PixelEval {
+  T dx, dy, sigma, gauss, alpha;
+  bool counts;  // sigma >= 0 and alpha >= kAlphaMin: the splat blends into this pixel
+};
+
+template <typename T>
+inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
+  PixelEval<T> e;
+  e.dx = s.mx - px;
+  e.dy = s.my - py;
+  e.sigma = T(0.5) * (s.ca * e.dx * e.dx + s.cc * e.dy * e.dy) + s.cb * e.dx * e.dy;
+  e.gauss = std::exp(-e.sigma);
+  e.alpha = std::min(T(io::kAlphaMax), s.opacity * e.gauss);
+  e.counts = e.sigma >= 0 && e.alpha >= T(io::kAlphaMin);
+  return e;
+}
+
+struct TileGeometry {
+  int x0, y0;          // first pixel of the tile
+  int width, height;   // pixels of the tile inside the image
+};
+
+TileGeometry tile_geometry(int tile, int tiles_x, int image_w, int image_h) {
+  const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+  return {x0, y0, std::min(kTile, image_w - x0), std::min(kTile, image_h - y0)};
+}
+
+}  // namespace
+
+template <typename T>
+void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
+  const int w = f.camera.width, h = f.camera.height;
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  f.width = w;
+  f.height = h;
+  f.rgb.assign(pixels * 3, 0);
+  f.alpha.assign(pixels, 0);
+  f.depth.assign(pixels, 0);
+  f.depth_normalized.assign(pixels, 0);
+  f.last_contributor.assign(pixels, 0);
+  f.final_transmittance.assign(pixels, 1);
+  const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
+                   T(f.settings.background[2])};
+
+  pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
+    const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
+    alignas(64) T trans[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
+        acc_b[kTilePixels], acc_z[kTilePixels];
+    alignas(64) int32_t last[kTilePixels], done[kTilePixels];
+    for (int p = 0; p < kTilePixels; ++p) {
+      trans[p] = 1;
+      acc_r[p] = acc_g[p] = acc_b[p] = acc_z[p] = 0;
+      last[p] = 0;
+      // Pixels past the image edge start finished so they never hold the tile open.
+      done[p] = (p % kTile) >= geo.width || (p / kTile) >= geo.height;
+    }
+    int remaining = geo.width * geo.height;
+    const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
+    for (uint32_t s = begin; s < end && remaining > 0; ++s) {
+      const uint32_t id = f.sorted_ids[s];
+      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
+      if (rect.empty()) continue;
+      const Splat<T> sp = load_splat(f, id);
+      const int32_t next_last = static_cast<int32_t>(s + 1);
+      int finished = 0;
+      for (int y = rect.y0; y < rect.y1; ++y) {
+        const T py = T(geo.y0 + y) + T(0.5);
+#pragma omp simd reduction(+ : finished)
+        for (int x = rect.x0; x < rect.x1; ++x) {
+          const int p = y * kTile + x;
+          const PixelEval<T> e = eval_pixel(sp, T(geo.x0 + x) + T(0.5), py);
+          const T t = trans[p];
+          const T next_t = t * (1 - e.alpha);
+          const bool live = done[p] == 0 && e.counts;
+          const bool stop = live && next_t <= T(io::kTransmittanceMin);
+          const bool add = live && !stop;
+          const T weight = add ? e.alpha * t : T(0);
+          acc_r[p] += weight * sp.r;
+          acc_g[p] += weight * sp.g;
+          acc_b[p] += weight * sp.b;
+          acc_z[p] += weight * sp.z;
+          trans[p] = add ? next_t : t;
+          last[p] = add ? next_last : last[p];
+          done[p] = stop ? 1 : done[p];
+          finished += stop ? 1 : 0;
+        }
+      }
+      remaining -= finished;
+    }
+    for (int y = 0; y < geo.height; ++y) {
+      for (int x = 0; x < geo.width; ++x) {
+        const int p = y * kTile + x;
+        const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
+        f.rgb[o * 3] = acc_r[p] + trans[p] * bg[0];
+        f.rgb[o * 3 + 1] = acc_g[p] + trans[p] * bg[1];
+        f.rgb[o * 3 + 2] = acc_b[p] + trans[p] * bg[2];
+        f.alpha[o] = 1 - trans[p];
+        f.depth[o] = acc_z[p];
+        f.depth_normalized[o] = f.alpha[o] > 0 ? acc_z[p] / f.alpha[o] : T(0);
+        f.last_contributor[o] = static_cast<uint32_t>(last[p]);
+        f.final_transmittance[o] = trans[p];
+      }
+    }
+  });
+}
+
+template <typename T>
+ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<T>& d_image,
+                                  ThreadPool& pool) {
+  const int w = f.width, h = f.height;
+  const std::size_t n = f.gaussians.size();
+  // Gradients per intersection (sorted position): every intersection belongs to one tile, so
+  // tiles write disjoint slots; the per-Gaussian sum below runs in a fixed order.
+  enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
+  std::vector<T> isect(f.sorted_ids.size() * kSlots, 0);
+  const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
+                   T(f.settings.background[2])};
+  auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
+
+  pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
+    const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
+    // Per pixel: transmittance walking back to front, colour/depth accumulated behind the
+    // current splat, upstream gradients and the alpha/background term T_final (dA - bg.dC).
+    alignas(64) T trans[kTilePixels], behind_r[kTilePixels], behind_g[kTilePixels],
+        behind_b[kTilePixels], behind_z[kTilePixels], v_r[kTilePixels], v_g[kTilePixels],
+        v_b[kTilePixels], v_z[kTilePixels], v_final[kTilePixels];
+    alignas(64) int32_t last[kTilePixels];
+    int32_t max_last = 0;
+    for (int p = 0; p < kTilePixels; ++p) {
+      const int x = p % kTile, y = p / kTile;
+      trans[p] = 1;
+      behind_r[p] = behind_g[p] = behind_b[p] = behind_z[p] = 0;
+      v_r[p] = v_g[p] = v_b[p] = v_z[p] = v_final[p] = 0;
+      last[p] = 0;
+      if (x >= geo.width || y >= geo.height) continue;
+      const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
+      trans[p] = f.final_transmittance[o];
+      v_r[p] = grad_at(d_image.rgb, o * 3);
+      v_g[p] = grad_at(d_image.rgb, o * 3 + 1);
+      v_b[p] = grad_at(d_image.rgb, o * 3 + 2);
+      v_z[p] = grad_at(d_image.depth, o);
+      // rgb += T_final bg and alpha = 1 - T_final; dT_final/dalpha_j = -T_final / (1 - alpha_j).
+      v_final[p] = trans[p] * (grad_at(d_image.alpha, o) -
+                               (bg[0] * v_r[p] + bg[1] * v_g[p] + bg[2] * v_b[p]));
+      last[p] = static_cast<int32_t>(f.last_contributor[o]);
+      max_last = std::max(max_last, last[p]);
+    }
+    const uint32_t begin = f.tile_ranges[tile * 2];
+    for (int64_t s = int64_t(max_last) - 1; s >= int64_t(begin); --s) {
+      const uint32_t id = f.sorted_ids[s];
+      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
+      if (rect.empty()) continue;
+      const Splat<T> sp = load_splat(f, id);
+      T g_mx = 0, g_my = 0, g_ca = 0, g_cb = 0, g_cc = 0, g_op = 0, g_r = 0, g_g = 0, g_b = 0,
+        g_z = 0;
+      for (int y = rect.y0; y < rect.y1; ++y) {
+        const T py = T(geo.y0 + y) + T(0.5);
+#pragma omp simd reduction(+ : g_mx, g_my, g_ca, g_cb, g_cc, g_op, g_r, g_g, g_b, g_z)
+        for (int x = rect.x0; x < rect.x1; ++x) {
+          const int p = y * kTile + x;
+          const PixelEval<T> e = eval_pixel(sp, T(geo.x0 + x) + T(0.5), py);
+          const bool live = s < last[p] && e.counts;
+          const T one_minus = 1 - e.alpha;
+          const T inv = live ? 1 / one_minus : T(0);
+          const T t = live ? trans[p] * inv : trans[p];  // transmittance in front of the splat
+          const T weight = live ? e.alpha * t : T(0);
+          // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
+          const T v_alpha = (sp.r * t - behind_r[p] * inv) * v_r[p] +
+                            (sp.g * t - behind_g[p] * inv) * v_g[p] +
+                            (sp.b * t - behind_b[p] * inv) * v_b[p] +
+                            (sp.z * t - behind_z[p] * inv) * v_z[p] + v_final[p] * inv;
+          g_r += weight * v_r[p];
+          g_g += weight * v_g[p];
+          g_b += weight * v_b[p];
+          g_z += weight * v_z[p];
+          behind_r[p] += weight * sp.r;
+          behind_g[p] += weight * sp.g;
+          behind_b[p] += weight * sp.b;
+          behind_z[p] += weight * sp.z;
+          trans[p] = t;
+          // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
+          const bool smooth = live && sp.opacity * e.gauss < T(io::kAlphaMax);
+          const T v_sigma = smooth ? -sp.opacity * e.gauss * v_alpha : T(0);
+          g_op += smooth ? e.gauss * v_alpha : T(0);
+          g_ca += T(0.5) * e.dx * e.dx * v_sigma;
+          g_cc += T(0.5) * e.dy * e.dy * v_sigma;
+          g_cb += e.dx * e.dy * v_sigma;
+          g_mx += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
+          g_my += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
+        }
+      }
+      T* out = &isect[static_cast<std::size_t>(s) * kSlots];
+      out[kMx] = g_mx;
+      out[kMy] = g_my;
+      out[kCa] = g_ca;
+      out[kCb] = g_cb;
+      out[kCc] = g_cc;
+      out[kOpacity] = g_op;
+      out[kR] = g_r;
+      out[kG] = g_g;
+      out[kB] = g_b;
+      out[kZ] = g_z;
+    }
+  });
+
+  ScreenGrads<T> g;
+  g.means2d.assign(n * 2, 0);
+  g.conics.assign(n * 3, 0);
+  g.opacities.assign(n, 0);
+  g.colors.assign(n * 3, 0);
+  g.depths.assign(n, 0);
+  for (std::size_t s = 0; s < f.sorted_ids.size(); ++s) {
+    const std::size_t id = f.sorted_ids[s];
+    const T* in = &isect[s * kSlots];
+    g.means2d[id * 2] += in[kMx];
+    g.means2d[id * 2 + 1] += in[kMy];
+    g.conics[id * 3] += in[kCa];
+    g.conics[id * 3 + 1] += in[kCb];
+    g.conics[id * 3 + 2] += in[kCc];
+    g.opacities[id] += in[kOpacity];
+    g.colors[id * 3] += in[kR];
+    g.colors[id * 3 + 1] += in[kG];
+    g.colors[id * 3 + 2] += in[kB];
+    g.depths[id] += in[kZ];
+  }
+  return g;
+}
+
+template void composite_forward(ForwardResultT<float>&, ThreadPool&);
+template void composite_forward(ForwardResultT<double>&, ThreadPool&);
+template ScreenGrads<float> composite_backward(const ForwardResultT<float>&,
+                                               const ImageGradsT<float>&, ThreadPool&);
+template ScreenGrads<double> composite_backward(const ForwardResultT<double>&,
+                                                const ImageGradsT<double>&, ThreadPool&);
+
+}  // namespace splat::cpu

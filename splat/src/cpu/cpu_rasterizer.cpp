@@ -1,0 +1,34 @@
+#include "splat/cpu_reference.h"
+#include "splat/rasterizer.h"
+
+namespace splat {
+namespace {
+
+class CpuRasterizer final : public Rasterizer {
+ public:
+  explicit CpuRasterizer(const CpuOptions& options) : pool_(options.threads) {}
+
+  std::string name() const override {
+    return "cpu (" + std::to_string(pool_.size()) + " threads)";
+  }
+
+  ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
+                        const RenderSettings& settings) override {
+    return reference_forward(gaussians, camera, settings, pool_);
+  }
+
+  BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) override {
+    return reference_backward(forward, d_image, pool_);
+  }
+
+ private:
+  ThreadPool pool_;
+};
+
+}  // namespace
+
+std::unique_ptr<Rasterizer> make_cpu_rasterizer(const CpuOptions& options) {
+  return std::make_unique<CpuRasterizer>(options);
+}
+
+}  // namespace splat

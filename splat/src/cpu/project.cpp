@@ -1,0 +1,269 @@
+#include <algorithm>
+#include <cmath>
+
+#include "cpu/math.h"
+#include "cpu/stages.h"
+#include "shader_io.h"
+
+namespace splat::cpu {
+namespace {
+
+enum class Cull : uint8_t { kNone, kDepth, kDegenerate, kFaint, kOffscreen };
+
+// Camera extrinsics and intrinsics in the working scalar type.
+template <typename T>
+struct CameraModel {
+  Mat3<T> rotation;      // W: world to camera rotation
+  Vec3<T> translation;   // t: p_cam = W p_world + t
+  Vec3<T> position;      // camera centre in the world frame, -W^T t
+  PerspectiveProjection<T> projection;
+
+  explicit CameraModel(const Camera& c)
+      : projection(T(c.fx), T(c.fy), T(c.cx), T(c.cy), c.width, c.height, T(io::kFovClampMargin)) {
+    const Eigen::Matrix3d r = c.T_cam_world.linear();
+    for (int col = 0; col < 3; ++col)
+      for (int row = 0; row < 3; ++row) rotation[col][row] = T(r(row, col));
+    for (int i = 0; i < 3; ++i) translation[i] = T(c.T_cam_world.translation()[i]);
+    position = -(glm::transpose(rotation) * translation);
+  }
+};
+
+template <typename T>
+Vec3<T> load3(std::span<const T> a, std::size_t i) {
+  return {a[3 * i], a[3 * i + 1], a[3 * i + 2]};
+}
+template <typename T>
+Vec4<T> load4(std::span<const T> a, std::size_t i) {
+  return {a[4 * i], a[4 * i + 1], a[4 * i + 2], a[4 * i + 3]};
+}
+
+int effective_degree(int map_degree, const RenderSettings& settings) {
+  return settings.sh_degree < 0 ? map_degree : std::min(map_degree, settings.sh_degree);
+}
+
+}  // namespace
+
+template <typename T>
+void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
+  const GaussiansViewT<T>& g = frame.gaussians;
+  const std::size_t n = g.size();
+  const CameraModel<T> cam(frame.camera);
+  const int degree = effective_degree(g.sh_degree, frame.settings);
+  const int stride_k = sh_coeff_count(g.sh_degree);
+  const int width = frame.camera.width, height = frame.camera.height;
+  frame.means2d.assign(n * 2, 0);
+  frame.conics.assign(n * 3, 0);
+  frame.depths.assign(n, 0);
+  frame.radii.assign(n * 2, 0);
+  frame.colors.assign(n * 3, 0);
+  frame.opacities.assign(n, 0);
+  std::vector<Cull> cull(n, Cull::kNone);
+
+  constexpr std::size_t kChunk = 1024;
+  pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    const std::size_t end = std::min(n, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      const Vec3<T> p_world = load3(g.means, i);
+      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      const T opacity = sigmoid(g.opacity_logits[i]);
+      frame.opacities[i] = opacity;
+      frame.depths[i] = p.z;
+
+      // Colour for this view: SH at the unit direction from the camera, +0.5, clamped at 0.
+      T basis[16];
+      const Vec3<T> dir = p_world - cam.position;
+      const T dir_len = glm::length(dir);
+      sh_basis(dir_len > 0 ? degree : 0, dir_len > 0 ? dir / dir_len : dir, basis);
+      const int used = dir_len > 0 ? sh_coeff_count(degree) : 1;
+      for (int c = 0; c < 3; ++c) {
+        T sum = 0;
+        for (int k = 0; k < used; ++k) sum += basis[k] * g.sh[(i * stride_k + k) * 3 + c];
+        frame.colors[i * 3 + c] = std::max(sum + T(0.5), T(0));
+      }
+
+      if (p.z < T(frame.camera.near) || p.z > T(frame.camera.far)) {
+        cull[i] = Cull::kDepth;
+        continue;
+      }
+      const Vec4<T> q = load4(g.rotations, i);
+      const T q_len = glm::length(q);
+      if (!(q_len > 0)) {
+        cull[i] = Cull::kDegenerate;
+        continue;
+      }
+      // EWA: Sigma_cam = W Sigma W^T, cov2d = J Sigma_cam J^T + dilation.
+      const Mat3<T> sigma = covariance_3d(q / q_len, load3(g.log_scales, i));
+      const Mat3<T> sigma_cam = cam.rotation * sigma * glm::transpose(cam.rotation);
+      Mat2<T> cov2d = cam.projection.cov2d(p, sigma_cam);
+      cov2d[0][0] += T(io::kCov2dDilation);
+      cov2d[1][1] += T(io::kCov2dDilation);
+      Vec3<T> conic;
+      if (!invert_sym2(cov2d, conic)) {
+        cull[i] = Cull::kDegenerate;
+        continue;
+      }
+      if (opacity < T(io::kAlphaMin)) {
+        cull[i] = Cull::kFaint;
+        continue;
+      }
+      // Extent: where opacity * exp(-r^2/2) falls to kAlphaMin, at most kExtentSigmaMax sigma.
+      const T extend = std::min(T(io::kExtentSigmaMax),
+                                std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+      const T radius_x = std::ceil(extend * std::sqrt(cov2d[0][0]));
+      const T radius_y = std::ceil(extend * std::sqrt(cov2d[1][1]));
+      const Vec2<T> mean2d = cam.projection.mean2d(p);
+      if ((radius_x <= 0 && radius_y <= 0) || mean2d.x + radius_x <= 0 ||
+          mean2d.x - radius_x >= T(width) || mean2d.y + radius_y <= 0 ||
+          mean2d.y - radius_y >= T(height)) {
+        cull[i] = Cull::kOffscreen;
+        continue;
+      }
+      frame.means2d[i * 2] = mean2d.x;
+      frame.means2d[i * 2 + 1] = mean2d.y;
+      for (int k = 0; k < 3; ++k) frame.conics[i * 3 + k] = conic[k];
+      frame.radii[i * 2] = static_cast<int32_t>(radius_x);
+      frame.radii[i * 2 + 1] = static_cast<int32_t>(radius_y);
+    }
+  });
+
+  RenderStats& stats = frame.stats;
+  stats = {};
+  for (Cull c : cull) {
+    switch (c) {
+      case Cull::kNone: ++stats.visible; break;
+      case Cull::kDepth: ++stats.culled_depth; break;
+      case Cull::kDegenerate: ++stats.culled_degenerate; break;
+      case Cull::kFaint: ++stats.culled_faint; break;
+      case Cull::kOffscreen: ++stats.culled_offscreen; break;
+    }
+  }
+}
+
+template <typename T>
+void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& screen,
+                      BackwardResultT<T>& out, ThreadPool& pool) {
+  const GaussiansViewT<T>& g = frame.gaussians;
+  const std::size_t n = g.size();
+  const CameraModel<T> cam(frame.camera);
+  const int degree = effective_degree(g.sh_degree, frame.settings);
+  const int stride_k = sh_coeff_count(g.sh_degree);
+  GaussianGradsT<T>& d = out.d_gaussians;
+  d.sh_degree = g.sh_degree;
+  d.resize(n);
+  std::fill(d.means.begin(), d.means.end(), T(0));
+  std::fill(d.log_scales.begin(), d.log_scales.end(), T(0));
+  std::fill(d.rotations.begin(), d.rotations.end(), T(0));
+  std::fill(d.opacity_logits.begin(), d.opacity_logits.end(), T(0));
+  std::fill(d.sh.begin(), d.sh.end(), T(0));
+  out.d_means2d = screen.means2d;
+  out.visible.assign(n, 0);
+
+  // Pose gradient, summed per fixed-size chunk and then in chunk order: the result does not
+  // depend on the thread count. dL/dW (3x3) and dL/dt (3) of p_cam = W p + t.
+  constexpr std::size_t kChunk = 1024;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<Mat3<double>> chunk_v_w(chunks, Mat3<double>(0));
+  std::vector<Vec3<double>> chunk_v_t(chunks, Vec3<double>(0));
+
+  pool.parallel_for(chunks, [&](std::size_t chunk) {
+    const std::size_t end = std::min(n, (chunk + 1) * kChunk);
+    Mat3<T> v_w(0);
+    Vec3<T> v_t(0);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      const Vec3<T> p_world = load3(g.means, i);
+      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      Vec3<T> v_p_world(0);  // dL/d mean (world)
+      Vec3<T> v_p(0);        // dL/d p_cam
+
+      // Colour: SH coefficients and the view direction.
+      const Vec3<T> dir = p_world - cam.position;
+      const T dir_len = glm::length(dir);
+      const int used_degree = dir_len > 0 ? degree : 0;
+      const Vec3<T> unit = dir_len > 0 ? dir / dir_len : dir;
+      T basis[16];
+      sh_basis(used_degree, unit, basis);
+      const int used = sh_coeff_count(used_degree);
+      T w_basis[16] = {};
+      for (int c = 0; c < 3; ++c) {
+        T raw = T(0.5);
+        for (int k = 0; k < used; ++k) raw += basis[k] * g.sh[(i * stride_k + k) * 3 + c];
+        if (raw < 0) continue;  // clamped at zero: no gradient
+        const T v_c = screen.colors[i * 3 + c];
+        for (int k = 0; k < used; ++k) {
+          d.sh[(i * stride_k + k) * 3 + c] = basis[k] * v_c;
+          w_basis[k] += g.sh[(i * stride_k + k) * 3 + c] * v_c;
+        }
+      }
+      if (used_degree > 0 && frame.settings.sh_direction_gradient) {
+        const Vec3<T> v_dir = normalize_vjp(dir, sh_basis_vjp(used_degree, unit, w_basis));
+        v_p_world += v_dir;
+        // dir = mean - c with camera centre c = -W^T t, so dL/dc = -v_dir and the pose gets
+        // dL/dt += W v_dir, dL/dW += t v_dir^T (GLM: outerProduct(a, b) = a b^T).
+        v_t += cam.rotation * v_dir;
+        v_w += glm::outerProduct(cam.translation, v_dir);
+      }
+
+      const T opacity = frame.opacities[i];
+      d.opacity_logits[i] = screen.opacities[i] * opacity * (1 - opacity);
+
+      const bool visible = frame.radii[i * 2] > 0 || frame.radii[i * 2 + 1] > 0;
+      if (visible) {
+        out.visible[i] = 1;
+        v_p.z += screen.depths[i];
+        const Vec4<T> q = load4(g.rotations, i);
+        const T q_len = glm::length(q);
+        const Vec4<T> unit_q = q / q_len;
+        const Vec3<T> log_scale = load3(g.log_scales, i);
+        const Mat3<T> sigma = covariance_3d(unit_q, log_scale);
+        const Mat3<T> sigma_cam = cam.rotation * sigma * glm::transpose(cam.rotation);
+        const Vec3<T> conic(frame.conics[i * 3], frame.conics[i * 3 + 1], frame.conics[i * 3 + 2]);
+        const Vec3<T> v_conic(screen.conics[i * 3], screen.conics[i * 3 + 1],
+                              screen.conics[i * 3 + 2]);
+        const Mat2<T> v_cov2d = invert_sym2_vjp(conic, v_conic);  // dilation adds no gradient
+        const Vec2<T> v_mean2d(screen.means2d[i * 2], screen.means2d[i * 2 + 1]);
+        Mat3<T> v_sigma_cam(0);
+        cam.projection.vjp(p, sigma_cam, v_mean2d, v_cov2d, v_p, v_sigma_cam);
+        // Sigma_cam = W Sigma W^T.
+        const Mat3<T> v_sigma = glm::transpose(cam.rotation) * v_sigma_cam * cam.rotation;
+        v_w += (v_sigma_cam + glm::transpose(v_sigma_cam)) * cam.rotation * sigma;
+        Vec4<T> v_unit_q(0);
+        Vec3<T> v_log_scale(0);
+        covariance_3d_vjp(unit_q, log_scale, v_sigma, v_unit_q, v_log_scale);
+        const Vec4<T> v_q = normalize_vjp(q, v_unit_q);
+        for (int k = 0; k < 4; ++k) d.rotations[i * 4 + k] = v_q[k];
+        for (int k = 0; k < 3; ++k) d.log_scales[i * 3 + k] = v_log_scale[k];
+      }
+      // p_cam = W p_world + t.
+      v_p_world += glm::transpose(cam.rotation) * v_p;
+      v_w += glm::outerProduct(v_p, p_world);
+      v_t += v_p;
+      for (int k = 0; k < 3; ++k) d.means[i * 3 + k] = v_p_world[k];
+    }
+    chunk_v_w[chunk] = Mat3<double>(v_w);
+    chunk_v_t[chunk] = Vec3<double>(v_t);
+  });
+
+  Mat3<double> v_w(0);
+  Vec3<double> v_t(0);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    v_w += chunk_v_w[c];
+    v_t += chunk_v_t[c];
+  }
+  // Left perturbation T <- exp([v, w]) T: dW = [w]x W, dt = v + [w]x t. With A = dL/dW W^T +
+  // dL/dt t^T, dL/dw = (A32 - A23, A13 - A31, A21 - A12) and dL/dv = dL/dt.
+  const Mat3<double> w(cam.rotation);
+  const Vec3<double> t(cam.translation);
+  const Mat3<double> a = v_w * glm::transpose(w) + glm::outerProduct(v_t, t);
+  auto at = [&](int row, int col) { return a[col][row]; };
+  out.d_loss_d_pose << v_t.x, v_t.y, v_t.z, at(2, 1) - at(1, 2), at(0, 2) - at(2, 0),
+      at(1, 0) - at(0, 1);
+}
+
+template void project_forward(ForwardResultT<float>&, ThreadPool&);
+template void project_forward(ForwardResultT<double>&, ThreadPool&);
+template void project_backward(const ForwardResultT<float>&, const ScreenGrads<float>&,
+                               BackwardResultT<float>&, ThreadPool&);
+template void project_backward(const ForwardResultT<double>&, const ScreenGrads<double>&,
+                               BackwardResultT<double>&, ThreadPool&);
+
+}  // namespace splat::cpu

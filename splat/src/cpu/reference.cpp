@@ -1,0 +1,55 @@
+#include <string>
+
+#include "cpu/stages.h"
+#include "splat/cpu_reference.h"
+#include "splat/error.h"
+
+namespace splat {
+
+template <typename Scalar>
+ForwardResultT<Scalar> reference_forward(const GaussiansViewT<Scalar>& gaussians,
+                                         const Camera& camera, const RenderSettings& settings,
+                                         ThreadPool& pool) {
+  validate(gaussians, "rasterize");
+  camera.validate("rasterize");
+  ForwardResultT<Scalar> frame;
+  frame.gaussians = gaussians;
+  frame.camera = camera;
+  frame.settings = settings;
+  cpu::project_forward(frame, pool);
+  cpu::bin_and_sort(frame, pool);
+  cpu::composite_forward(frame, pool);
+  return frame;
+}
+
+template <typename Scalar>
+BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward,
+                                           const ImageGradsT<Scalar>& d_image, ThreadPool& pool) {
+  const std::size_t pixels = static_cast<std::size_t>(forward.width) * forward.height;
+  auto check = [&](const std::vector<Scalar>& v, std::size_t channels, const char* name) {
+    if (!v.empty() && v.size() != pixels * channels) {
+      throw Error(std::string("rasterize backward: d_") + name + " has " +
+                  std::to_string(v.size()) + " values, expected " +
+                  std::to_string(pixels * channels) + " for " + std::to_string(forward.width) +
+                  "x" + std::to_string(forward.height) + "x" + std::to_string(channels));
+    }
+  };
+  check(d_image.rgb, 3, "rgb");
+  check(d_image.alpha, 1, "alpha");
+  check(d_image.depth, 1, "depth");
+  BackwardResultT<Scalar> out;
+  const cpu::ScreenGrads<Scalar> screen = cpu::composite_backward(forward, d_image, pool);
+  cpu::project_backward(forward, screen, out, pool);
+  return out;
+}
+
+template ForwardResultT<float> reference_forward(const GaussiansViewT<float>&, const Camera&,
+                                                 const RenderSettings&, ThreadPool&);
+template ForwardResultT<double> reference_forward(const GaussiansViewT<double>&, const Camera&,
+                                                  const RenderSettings&, ThreadPool&);
+template BackwardResultT<float> reference_backward(const ForwardResultT<float>&,
+                                                   const ImageGradsT<float>&, ThreadPool&);
+template BackwardResultT<double> reference_backward(const ForwardResultT<double>&,
+                                                    const ImageGradsT<double>&, ThreadPool&);
+
+}  // namespace splat

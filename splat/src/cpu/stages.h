@@ -1,0 +1,43 @@
+// The stages of the CPU reference, in pipeline order. Each reads and writes the ForwardResult
+// that carries the frame, so every intermediate buffer stays inspectable.
+#pragma once
+#include <vector>
+
+#include "splat/rasterizer.h"
+#include "splat/thread_pool.h"
+
+namespace splat::cpu {
+
+// dL/d(per-Gaussian screen quantities): what compositing's backward hands to projection's.
+template <typename T>
+struct ScreenGrads {
+  std::vector<T> means2d;    // [N, 2]
+  std::vector<T> conics;     // [N, 3]
+  std::vector<T> opacities;  // [N]
+  std::vector<T> colors;     // [N, 3]
+  std::vector<T> depths;     // [N]
+};
+
+// Projection: 3D Gaussians to 2D means, conics, depths, radii, colours and opacities.
+template <typename T>
+void project_forward(ForwardResultT<T>& frame, ThreadPool& pool);
+
+// Tiling: lists every (tile, splat) pair and sorts each tile's list front to back.
+template <typename T>
+void bin_and_sort(ForwardResultT<T>& frame, ThreadPool& pool);
+
+// Compositing: blends each tile's sorted splats into the output images.
+template <typename T>
+void composite_forward(ForwardResultT<T>& frame, ThreadPool& pool);
+
+// Backward of compositing: per-Gaussian gradients of the screen quantities.
+template <typename T>
+ScreenGrads<T> composite_backward(const ForwardResultT<T>& frame, const ImageGradsT<T>& d_image,
+                                  ThreadPool& pool);
+
+// Backward of projection: gradients of the Gaussian parameters and of the camera pose.
+template <typename T>
+void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& screen,
+                      BackwardResultT<T>& out, ThreadPool& pool);
+
+}  // namespace splat::cpu

@@ -1,0 +1,99 @@
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numeric>
+
+#include "cpu/stages.h"
+#include "shader_io.h"
+
+namespace splat::cpu {
+namespace {
+
+struct TileBox {
+  int x0, y0, x1, y1;  // tiles [x0, x1) x [y0, y1)
+  int count() const { return (x1 - x0) * (y1 - y0); }
+};
+
+// Tiles touched by a splat's per-axis extent box, clamped to the grid (gsplat's isect_tiles).
+template <typename T>
+TileBox tile_box(const ForwardResultT<T>& f, std::size_t i) {
+  const int rx = f.radii[i * 2], ry = f.radii[i * 2 + 1];
+  if (rx <= 0 && ry <= 0) return {0, 0, 0, 0};
+  const T tile = T(io::kTileSize);
+  const T mx = f.means2d[i * 2] / tile, my = f.means2d[i * 2 + 1] / tile;
+  const T ex = T(rx) / tile, ey = T(ry) / tile;
+  auto clamp_to = [](T v, int hi) { return std::clamp(static_cast<int>(v), 0, hi); };
+  // Clamp in floating point first so huge values cannot overflow the int conversion.
+  auto grid = [&](T v, int hi) { return clamp_to(std::clamp(v, T(0), T(hi)), hi); };
+  return {grid(std::floor(mx - ex), f.tiles_x), grid(std::floor(my - ey), f.tiles_y),
+          grid(std::ceil(mx + ex), f.tiles_x), grid(std::ceil(my + ey), f.tiles_y)};
+}
+
+// Sort key: camera depth (positive, so its float bits order like the value), then Gaussian
+// index for ties, as a stable radix sort of gsplat's keys would order them.
+template <typename T>
+uint64_t depth_key(T depth, uint32_t id) {
+  const float d = static_cast<float>(depth);
+  return (static_cast<uint64_t>(std::bit_cast<uint32_t>(d)) << 32) | id;
+}
+
+}  // namespace
+
+template <typename T>
+void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
+  const std::size_t n = f.gaussians.size();
+  f.tiles_x = static_cast<int>((f.camera.width + io::kTileSize - 1) / io::kTileSize);
+  f.tiles_y = static_cast<int>((f.camera.height + io::kTileSize - 1) / io::kTileSize);
+  const std::size_t tiles = static_cast<std::size_t>(f.tiles_x) * f.tiles_y;
+
+  // Count per tile in fixed chunks of Gaussians, so work splits without atomics.
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<uint32_t> chunk_counts(chunks * tiles, 0);
+  pool.parallel_for(chunks, [&](std::size_t c) {
+    uint32_t* counts = &chunk_counts[c * tiles];
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      const TileBox b = tile_box(f, i);
+      for (int ty = b.y0; ty < b.y1; ++ty)
+        for (int tx = b.x0; tx < b.x1; ++tx) ++counts[ty * f.tiles_x + tx];
+    }
+  });
+  // Exclusive prefix over (tile, chunk): each chunk's slot inside each tile's range.
+  f.tile_ranges.assign(tiles * 2, 0);
+  uint32_t offset = 0;
+  for (std::size_t t = 0; t < tiles; ++t) {
+    f.tile_ranges[t * 2] = offset;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const uint32_t count = chunk_counts[c * tiles + t];
+      chunk_counts[c * tiles + t] = offset;
+      offset += count;
+    }
+    f.tile_ranges[t * 2 + 1] = offset;
+  }
+  f.stats.intersections = offset;
+
+  std::vector<uint64_t> keys(offset);
+  pool.parallel_for(chunks, [&](std::size_t c) {
+    uint32_t* slots = &chunk_counts[c * tiles];
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      const TileBox b = tile_box(f, i);
+      const uint64_t key = depth_key(f.depths[i], static_cast<uint32_t>(i));
+      for (int ty = b.y0; ty < b.y1; ++ty)
+        for (int tx = b.x0; tx < b.x1; ++tx) keys[slots[ty * f.tiles_x + tx]++] = key;
+    }
+  });
+  f.sorted_ids.resize(offset);
+  pool.parallel_for(tiles, [&](std::size_t t) {
+    const auto begin = keys.begin() + f.tile_ranges[t * 2];
+    const auto end = keys.begin() + f.tile_ranges[t * 2 + 1];
+    std::sort(begin, end);
+    for (auto it = begin; it != end; ++it) {
+      f.sorted_ids[static_cast<std::size_t>(it - keys.begin())] = static_cast<uint32_t>(*it);
+    }
+  });
+}
+
+template void bin_and_sort(ForwardResultT<float>&, ThreadPool&);
+template void bin_and_sort(ForwardResultT<double>&, ThreadPool&);
+
+}  // namespace splat::cpu

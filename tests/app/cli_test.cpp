@@ -1,0 +1,107 @@
+// The gslam executable end to end: outputs on good input, one-line errors and non-zero exits
+// on bad input.
+#include <array>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "app/image_io.h"
+#include "app/ply_io.h"
+#include "support/random_scene.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+RunResult run_gslam(const std::string& args) {
+  RunResult r;
+  std::FILE* pipe = ::popen((std::string(GSLAM_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+splat::Gaussians small_map() {
+  gslam::test::SceneOptions o;
+  o.count = 200;
+  o.sh_degree = 1;
+  return gslam::test::make_random_scene<float>(o).gaussians;
+}
+
+TEST(CliRender, OrbitWritesPngAndExrAndSummary) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  const RunResult r = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "out").string() +
+                                " --orbit 3 --size 80x60 --format png,exr --backend cpu");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("rendered 3 views of 200 Gaussians at 80x60"), std::string::npos) << r.output;
+  for (int i = 0; i < 3; ++i) {
+    const std::string stem = (dir / "out" / ("view_000" + std::to_string(i))).string();
+    const splat::Image8 png = app::read_png_rgb8(stem + ".png");
+    EXPECT_EQ(png.width, 80);
+    const app::ExrImage exr = app::read_exr(stem + ".exr");
+    float covered = 0;
+    for (float a : exr.channels.at("A")) covered += a;
+    EXPECT_GT(covered, 10.f) << "view " << i << " should show the map";
+  }
+}
+
+TEST(CliRender, TrajectoryWithIntrinsicsRendersOneViewPerPose) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  gslam::test::write_text(dir / "traj.txt", "# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 0.05 0 0 0 0 0 1\n");
+  const RunResult r = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "out").string() +
+                                " --trajectory " + (dir / "traj.txt").string() + " --intrinsics 60,60,32,24,64,48");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "view_0001.png"));
+}
+
+struct BadCase {
+  const char* name;
+  std::string args;       // {dir} is replaced by the temp dir
+  std::string expected;   // fragment of the one-line error
+};
+
+class CliBadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(CliBadInput, PrintsOneLineErrorAndExitsNonZero) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  splat::Gaussians empty;
+  app::write_ply(dir / "empty.ply", empty);
+  gslam::test::write_text(dir / "bad.txt", "0.0 0 0 0 0 0 0\n");
+  auto expand = [&](std::string text) {
+    for (std::size_t at; (at = text.find("{dir}")) != std::string::npos;) text.replace(at, 5, dir.path().string());
+    return text;
+  };
+  const RunResult r = run_gslam(expand(GetParam().args));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(expand(GetParam().expected)), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("terminate"), std::string::npos) << "crashed: " << r.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CliBadInput,
+    ::testing::Values(
+        BadCase{"MissingMap", "render {dir}/none.ply --out {dir}/o", "error: {dir}/none.ply: cannot open file"},
+        BadCase{"EmptyMap", "render {dir}/empty.ply --out {dir}/o", "the map has no Gaussians"},
+        BadCase{"UnknownFormat", "render {dir}/map.obj --out {dir}/o", "unknown map format '.obj'"},
+        BadCase{"ZeroSize", "render {dir}/map.ply --out {dir}/o --size 0x480", "error: size '0x480'"},
+        BadCase{"HugeSize", "render {dir}/map.ply --out {dir}/o --size 100000x100000", "error: size"},
+        BadCase{"BadTrajectory", "render {dir}/map.ply --out {dir}/o --trajectory {dir}/bad.txt --intrinsics 1,1,1,1,8,8",
+                "bad.txt: line 1 has 7 values"},
+        BadCase{"TrajectoryWithoutIntrinsics", "render {dir}/map.ply --out {dir}/o --trajectory {dir}/bad.txt",
+                "--intrinsics"},
+        BadCase{"BadFormat", "render {dir}/map.ply --out {dir}/o --format jpg", "format 'jpg'"},
+        BadCase{"UnknownBackend", "render {dir}/map.ply --out {dir}/o --backend metal", "--backend"}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace

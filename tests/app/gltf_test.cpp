@@ -1,0 +1,117 @@
+#include <cmath>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "app/gltf_io.h"
+#include "support/expect_error.h"
+#include "support/random_scene.h"
+#include "support/temp_dir.h"
+#include "support/test_data.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+TEST(GltfFormat, RoundTripWithinFloatPrecision) {
+  TempDir dir;
+  for (const char* name : {"map.glb", "map.gltf"}) {
+    gslam::test::SceneOptions o;
+    o.sh_degree = 3;
+    o.count = 30;
+    const splat::Gaussians map = gslam::test::make_random_scene<float>(o).gaussians;
+    app::write_gltf(dir / name, map);
+    const app::GltfSplatScene scene = app::read_gltf_splats(dir / name);
+    ASSERT_EQ(scene.primitives.size(), 1u);
+    EXPECT_EQ(scene.primitives[0].kernel, "ellipse");
+    EXPECT_TRUE(scene.notices.empty());
+    const splat::Gaussians back = app::to_gaussians(scene);
+    ASSERT_EQ(back.size(), map.size());
+    ASSERT_EQ(back.sh_degree, 3);
+    EXPECT_EQ(back.means, map.means) << name;
+    EXPECT_EQ(back.log_scales, map.log_scales) << name;
+    EXPECT_EQ(back.sh, map.sh) << name;
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      // Rotations are stored normalized; compare the unit quaternions.
+      const float* q = &map.rotations[i * 4];
+      const float norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+      for (int k = 0; k < 4; ++k) EXPECT_NEAR(back.rotations[i * 4 + k], q[k] / norm, 1e-6f) << "splat " << i;
+      // Opacity is stored after the sigmoid; compare in that space.
+      auto sigmoid = [](float x) { return 1 / (1 + std::exp(-x)); };
+      EXPECT_NEAR(sigmoid(back.opacity_logits[i]), sigmoid(map.opacity_logits[i]), 1e-6f) << "splat " << i;
+    }
+  }
+}
+
+// Expected values from the fixtures' SOURCE.md (bevy_gaussian_splatting's conformance test).
+TEST(GltfFormat, DecodesEveryConformanceFixtureCase) {
+  for (const char* file : {"khr_conformance_matrix.gltf", "khr_conformance_matrix.glb"}) {
+    GSLAM_REQUIRE_SHARED_DATA(path, std::string("khr_gaussian_splatting_fixtures_bevy/") + file);
+    const app::GltfSplatScene scene = app::read_gltf_splats(path);
+    std::map<std::string, const app::GltfSplatPrimitive*> by_name;
+    for (const auto& p : scene.primitives) by_name[p.name] = &p;
+    ASSERT_EQ(by_name.size(), 15u) << file;
+    const std::map<std::string, std::vector<float>> scales = {
+        {"scale_f32", {0.2f, -0.1f, 0.7f}},  {"scale_i8", {1, -2, 3}},      {"scale_i8_norm", {1, 0, -1}},
+        {"scale_i16", {2, -3, 4}},           {"scale_i16_norm", {1, 0, -1}}, {"rotation_f32", {0, 0.5f, -0.5f}},
+        {"opacity_f32", {0, 0.5f, -0.5f}}};
+    for (const auto& [name, expected] : scales) {
+      ASSERT_TRUE(by_name.count(name)) << name;
+      for (int a = 0; a < 3; ++a) EXPECT_NEAR(by_name[name]->log_scales[a], expected[a], 1e-6f) << file << " " << name;
+    }
+    const std::map<std::string, float> opacities = {{"opacity_f32", 0.75f},
+                                                    {"opacity_u8_norm", 64.f / 255.f},
+                                                    {"opacity_u16_norm", 16384.f / 65535.f},
+                                                    {"scale_f32", 0.25f}};
+    for (const auto& [name, expected] : opacities) {
+      EXPECT_NEAR(by_name[name]->opacities[0], expected, 1e-7f) << file << " " << name;
+    }
+    EXPECT_EQ(by_name["scale_f32"]->color_space, "srgb_rec709_display");
+    EXPECT_EQ(by_name["rotation_f32"]->color_space, "lin_rec709_display");
+    for (int degree = 0; degree <= 3; ++degree) {
+      const auto* p = by_name["sh_degree" + std::to_string(degree)];
+      EXPECT_EQ(p->sh_degree, degree) << file;
+      EXPECT_EQ(p->sh.size(), static_cast<std::size_t>(3 * (degree + 1) * (degree + 1))) << file;
+    }
+    // Normalized integer rotations decode to (near) unit quaternions.
+    for (const char* name : {"rotation_i8_norm", "rotation_i16_norm"}) {
+      const auto& q = by_name[name]->rotations_xyzw;
+      EXPECT_NEAR(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), 1.f, 0.02f) << name;
+    }
+    EXPECT_EQ(app::to_gaussians(scene).size(), 15u);
+  }
+}
+
+TEST(GltfFormat, UnknownKernelAndColourSpaceFallBackWithNotices) {
+  GSLAM_REQUIRE_SHARED_DATA(path, "khr_gaussian_splatting_fixtures_bevy/khr_extensible_fallback.gltf");
+  const app::GltfSplatScene scene = app::read_gltf_splats(path);
+  ASSERT_EQ(scene.primitives.size(), 1u);
+  EXPECT_EQ(scene.primitives[0].kernel, "customShape");
+  EXPECT_TRUE(scene.primitives[0].sh_from_color0);
+  EXPECT_EQ(scene.notices.size(), 3u);  // COLOR_0 fallback, kernel, colour space
+  const splat::Gaussians g = app::to_gaussians(scene);
+  ASSERT_EQ(g.size(), 1u);
+  EXPECT_FLOAT_EQ(g.means[0], 1.f);
+  EXPECT_FLOAT_EQ(g.means[2], 3.f);
+}
+
+TEST(GltfFormat, BadInputGivesErrorNamingFileAndElement) {
+  TempDir dir;
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "missing.glb"), "missing.glb", "cannot open");
+  gslam::test::write_text(dir / "broken.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "broken.gltf"), "broken.gltf");
+  gslam::test::write_text(dir / "garbage.glb", "glTF this is not a binary glTF");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "garbage.glb"), "garbage.glb");
+  gslam::test::write_text(dir / "nosplat.gltf", R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}]})");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "nosplat.gltf"), "no KHR_gaussian_splatting primitive");
+  gslam::test::write_text(dir / "noscale.gltf", R"({"asset": {"version": "2.0"},
+    "extensionsUsed": ["KHR_gaussian_splatting"], "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "n"}],
+    "meshes": [{"primitives": [{"mode": 0, "attributes": {"POSITION": 0, "KHR_gaussian_splatting:ROTATION": 0},
+      "extensions": {"KHR_gaussian_splatting": {"kernel": "ellipse"}}}]}],
+    "buffers": [{"byteLength": 12, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}],
+    "bufferViews": [{"buffer": 0, "byteLength": 12}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3"}]})");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "noscale.gltf"), "noscale.gltf", "ROTATION", "components");
+}
+
+}  // namespace

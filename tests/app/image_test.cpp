@@ -1,0 +1,57 @@
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "app/image_io.h"
+#include "support/expect_error.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+TEST(ImageFormats, ExrKeepsEveryChannelExactly) {
+  TempDir dir;
+  const int w = 7, h = 5;
+  std::vector<float> rgb(w * h * 3), alpha(w * h), depth(w * h);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = 0.01f * static_cast<float>(i) - 0.3f;
+  for (std::size_t i = 0; i < alpha.size(); ++i) {
+    alpha[i] = static_cast<float>(i) / 40.f;
+    depth[i] = 1.5f + 0.125f * static_cast<float>(i);
+  }
+  app::write_render_exr(dir / "r.exr", w, h, rgb, alpha, depth);
+  const app::ExrImage img = app::read_exr(dir / "r.exr");
+  ASSERT_EQ(img.width, w);
+  ASSERT_EQ(img.height, h);
+  for (int c = 0; c < 3; ++c) {
+    const auto& plane = img.channels.at(std::string(1, "RGB"[c]));
+    for (int p = 0; p < w * h; ++p) ASSERT_EQ(plane[p], rgb[p * 3 + c]) << "channel " << c << " pixel " << p;
+  }
+  EXPECT_EQ(img.channels.at("A"), alpha);
+  EXPECT_EQ(img.channels.at("Z"), depth);
+}
+
+TEST(ImageFormats, PngClampsAndRoundsToEightBits) {
+  TempDir dir;
+  const std::vector<float> rgb = {-0.5f, 0.5f, 2.f, 0.2f, 1.f, NAN};
+  app::write_png_rgb(dir / "a.png", 2, 1, rgb);
+  const splat::Image8 back = app::read_png_rgb8(dir / "a.png");
+  ASSERT_EQ(back.width, 2);
+  const std::vector<uint8_t> expected = {0, 128, 255, 51, 255, 0};
+  EXPECT_EQ(back.data, expected);
+}
+
+TEST(ImageFormats, SixteenBitPngRoundTrips) {
+  TempDir dir;
+  splat::Image16 depth(3, 2, 1);
+  for (std::size_t i = 0; i < depth.data.size(); ++i) depth.data[i] = static_cast<uint16_t>(1000 * i + 7);
+  app::write_png_gray16(dir / "d.png", depth);
+  EXPECT_EQ(app::read_png_gray16(dir / "d.png").data, depth.data);
+  GSLAM_EXPECT_ERROR(app::read_png_rgb8(dir / "missing.png"), "missing.png", "cannot open");
+  gslam::test::write_text(dir / "bad.png", "\x89PNG\r\n\x1a\n garbage");
+  GSLAM_EXPECT_ERROR(app::read_png_rgb8(dir / "bad.png"), "bad.png");
+  app::write_png_rgb(dir / "rgb.png", 2, 1, std::vector<float>(6, 0.5f));
+  GSLAM_EXPECT_ERROR(app::read_png_gray16(dir / "rgb.png"), "rgb.png", "16-bit greyscale");
+}
+
+}  // namespace

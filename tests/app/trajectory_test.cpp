@@ -1,0 +1,70 @@
+#include <gtest/gtest.h>
+
+#include "app/trajectory.h"
+#include "app/views.h"
+#include "support/expect_error.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+TEST(TumTrajectory, RoundTripKeepsPosesAndTimestamps) {
+  TempDir dir;
+  std::vector<app::StampedPose> poses(3);
+  for (int i = 0; i < 3; ++i) {
+    poses[i].timestamp = 1341841873.273798 + 0.033 * i;
+    poses[i].T_world_cam = Eigen::Translation3d(0.1 * i, -0.2, 1.5) *
+                           Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d(0.2, 1, 0.1).normalized());
+  }
+  app::write_tum_trajectory(dir / "t.txt", poses);
+  const auto back = app::read_tum_trajectory(dir / "t.txt");
+  ASSERT_EQ(back.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(back[i].timestamp, poses[i].timestamp, 1e-6);
+    EXPECT_TRUE(back[i].T_world_cam.isApprox(poses[i].T_world_cam, 1e-8)) << "pose " << i;
+  }
+}
+
+TEST(TumTrajectory, MalformedLinesAreErrorsNamingTheLine) {
+  TempDir dir;
+  gslam::test::write_text(dir / "short.txt", "# comment\n1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n");
+  GSLAM_EXPECT_ERROR(app::read_tum_trajectory(dir / "short.txt"), "short.txt", "line 3 has 7 values");
+  gslam::test::write_text(dir / "word.txt", "1.0 0 0 zero 0 0 0 1\n");
+  GSLAM_EXPECT_ERROR(app::read_tum_trajectory(dir / "word.txt"), "line 1", "'zero' is not a finite number");
+  gslam::test::write_text(dir / "nan.txt", "1.0 0 0 nan 0 0 0 1\n");
+  GSLAM_EXPECT_ERROR(app::read_tum_trajectory(dir / "nan.txt"), "line 1", "not a finite number");
+  gslam::test::write_text(dir / "quat.txt", "1.0 0 0 0 0 0 0 0\n");
+  GSLAM_EXPECT_ERROR(app::read_tum_trajectory(dir / "quat.txt"), "line 1", "quaternion norm is 0");
+  GSLAM_EXPECT_ERROR(app::read_tum_trajectory(dir / "none.txt"), "none.txt", "cannot open");
+}
+
+TEST(CameraOptions, ParsesIntrinsicsAndSizesAndRejectsNonsense) {
+  const app::Intrinsics k = app::parse_intrinsics("535.4,539.2,320.1,247.6,640,480");
+  EXPECT_DOUBLE_EQ(k.fx, 535.4);
+  EXPECT_EQ(k.height, 480);
+  GSLAM_EXPECT_ERROR(app::parse_intrinsics("1,2,3"), "intrinsics '1,2,3'");
+  GSLAM_EXPECT_ERROR(app::parse_intrinsics("500,500,320,240,0,480"), "intrinsics");
+  EXPECT_EQ(app::parse_size("640x480"), std::make_pair(640, 480));
+  GSLAM_EXPECT_ERROR(app::parse_size("0x480"), "size '0x480'");
+  GSLAM_EXPECT_ERROR(app::parse_size("99999x10"), "size '99999x10'");
+}
+
+TEST(CameraOptions, OrbitCamerasLookAtTheCentre) {
+  app::MapExtent extent;
+  extent.center = Eigen::Vector3d(1, 2, 3);
+  extent.radius = 0.5;
+  const auto cams = app::orbit_cameras(extent, 8, 64, 48, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(cams.size(), 8u);
+  for (const auto& cam : cams) {
+    const Eigen::Vector3d c = cam.T_cam_world * extent.center;
+    EXPECT_NEAR(c.x(), 0, 1e-9);
+    EXPECT_NEAR(c.y(), 0, 1e-9);
+    EXPECT_NEAR(c.z(), 1.25, 1e-9);
+    // World up appears upward in the image (negative camera y).
+    EXPECT_LT((cam.T_cam_world.linear() * Eigen::Vector3d::UnitZ()).y(), 0);
+    EXPECT_NO_THROW(cam.validate("orbit"));
+  }
+}
+
+}  // namespace

@@ -1,0 +1,206 @@
+// Analytic and contract checks of the forward pass.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "splat/cpu_reference.h"
+#include "splat/error.h"
+#include "support/random_scene.h"
+
+namespace {
+
+splat::Camera front_camera(int width = 64, int height = 48) {
+  splat::Camera cam;
+  cam.width = width;
+  cam.height = height;
+  cam.fx = cam.fy = 50;
+  cam.cx = width / 2.0;
+  cam.cy = height / 2.0;
+  return cam;  // identity pose: looks along +z from the origin
+}
+
+// One isotropic splat; colour given directly as the DC term.
+void add_splat(splat::Gaussians& g, float x, float y, float z, float sigma, float opacity,
+               float r, float gr, float b) {
+  const std::size_t i = g.size();
+  g.resize(i + 1);
+  g.means[i * 3] = x;
+  g.means[i * 3 + 1] = y;
+  g.means[i * 3 + 2] = z;
+  for (int a = 0; a < 3; ++a) g.log_scales[i * 3 + a] = std::log(sigma);
+  g.rotations[i * 4] = 1;
+  g.opacity_logits[i] = std::log(opacity / (1 - opacity));
+  const float c0 = 0.28209479177387814f;
+  g.sh[i * 3] = (r - 0.5f) / c0;
+  g.sh[i * 3 + 1] = (gr - 0.5f) / c0;
+  g.sh[i * 3 + 2] = (b - 0.5f) / c0;
+}
+
+TEST(RasterizerForward, EmptySceneRendersBackground) {
+  splat::ThreadPool pool(2);
+  splat::RenderSettings settings;
+  settings.background = {0.25f, 0.5f, 0.75f};
+  const auto f = splat::reference_forward<float>(splat::Gaussians{}, front_camera(), settings, pool);
+  for (std::size_t p = 0; p < f.alpha.size(); ++p) {
+    ASSERT_EQ(f.alpha[p], 0.f) << "pixel " << p;
+    ASSERT_EQ(f.depth[p], 0.f) << "pixel " << p;
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(f.rgb[p * 3 + c], settings.background[c]) << "pixel " << p;
+  }
+}
+
+TEST(RasterizerForward, SplatLandsWhereProjectionSaysWithExpectedPeakAlpha) {
+  splat::Gaussians g;
+  // Projects to (fx x/z + cx, fy y/z + cy) = (50*0.2/2 + 32, 50*(-0.1)/2 + 24) = (37, 21.5):
+  // the centre of pixel (36, 21) is (36.5, 21.5), half a pixel off in x.
+  add_splat(g, 0.2f, -0.1f, 2.f, 0.05f, 0.6f, 1.f, 0.5f, 0.25f);
+  splat::ThreadPool pool(2);
+  const splat::Camera cam = front_camera();
+  const auto f = splat::reference_forward<float>(g, cam, {}, pool);
+  EXPECT_NEAR(f.means2d[0], 37.f, 1e-5f);
+  EXPECT_NEAR(f.means2d[1], 21.5f, 1e-5f);
+  // EWA: cov2d = sigma^2 J J^T + 0.3 I with J = [[fx/z, 0, -fx x/z^2], [0, fy/z, -fy y/z^2]].
+  const double j00 = 25, j02 = -50 * 0.2 / 4, j11 = 25, j12 = -50 * -0.1 / 4, s2 = 0.05 * 0.05;
+  const double a = s2 * (j00 * j00 + j02 * j02) + 0.3, b = s2 * j02 * j12,
+               c = s2 * (j11 * j11 + j12 * j12) + 0.3, det = a * c - b * b;
+  EXPECT_NEAR(f.conics[0], c / det, 1e-5);
+  EXPECT_NEAR(f.conics[1], -b / det, 1e-6);
+  EXPECT_NEAR(f.conics[2], a / det, 1e-5);
+  // Pixel (36, 21) sits at offset (-0.5, 0) from the mean: sigma = 0.5 * 0.25 * conic_a.
+  const std::size_t peak = 21 * cam.width + 36;
+  const double expected_alpha = 0.6 * std::exp(-0.5 * 0.25 * c / det);
+  EXPECT_NEAR(f.alpha[peak], expected_alpha, 1e-5);
+  EXPECT_NEAR(f.rgb[peak * 3], expected_alpha * 1.0, 1e-5);
+  EXPECT_NEAR(f.rgb[peak * 3 + 2], expected_alpha * 0.25, 1e-5);
+  EXPECT_NEAR(f.depth_normalized[peak], 2.f, 1e-5f);
+  // The brightest pixels are the two straddling x = 37.
+  std::size_t best = 0;
+  for (std::size_t p = 0; p < f.alpha.size(); ++p) best = f.alpha[p] > f.alpha[best] ? p : best;
+  EXPECT_EQ(best / cam.width, 21u);
+  EXPECT_TRUE(best % cam.width == 36 || best % cam.width == 37) << "peak at x " << best % cam.width;
+}
+
+TEST(RasterizerForward, NearSplatOccludesFarSplatWhateverTheInputOrder) {
+  splat::ThreadPool pool(2);
+  const splat::Camera cam = front_camera();
+  splat::Gaussians near_first, far_first;
+  add_splat(near_first, 0, 0, 2, 0.2f, 0.99f, 1, 0, 0);
+  add_splat(near_first, 0, 0, 4, 0.4f, 0.99f, 0, 0, 1);
+  add_splat(far_first, 0, 0, 4, 0.4f, 0.99f, 0, 0, 1);
+  add_splat(far_first, 0, 0, 2, 0.2f, 0.99f, 1, 0, 0);
+  const auto a = splat::reference_forward<float>(near_first, cam, {}, pool);
+  const auto b = splat::reference_forward<float>(far_first, cam, {}, pool);
+  const std::size_t centre = 24 * cam.width + 32;
+  EXPECT_GT(a.rgb[centre * 3], 0.9f) << "the near red splat should cover the centre";
+  EXPECT_LT(a.rgb[centre * 3 + 2], 0.05f) << "the far blue splat should be hidden";
+  EXPECT_NEAR(a.depth_normalized[centre], 2.f, 0.05f);
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) ASSERT_EQ(a.rgb[i], b.rgb[i]) << "value " << i;
+}
+
+TEST(RasterizerForward, CullsBehindCameraAndOffScreen) {
+  splat::ThreadPool pool(2);
+  splat::Gaussians g;
+  add_splat(g, 0, 0, -2, 0.1f, 0.9f, 1, 1, 1);   // behind
+  add_splat(g, 50, 0, 2, 0.1f, 0.9f, 1, 1, 1);   // far off to the right
+  add_splat(g, 0, 0, 0.001f, 0.1f, 0.9f, 1, 1, 1);  // inside the near plane
+  const auto f = splat::reference_forward<float>(g, front_camera(), {}, pool);
+  EXPECT_EQ(f.stats.visible, 0u);
+  EXPECT_EQ(f.stats.culled_depth, 2u);
+  EXPECT_EQ(f.stats.culled_offscreen, 1u);
+  EXPECT_EQ(f.stats.intersections, 0u);
+  for (std::size_t p = 0; p < f.alpha.size(); ++p) ASSERT_EQ(f.alpha[p], 0.f) << "pixel " << p;
+}
+
+TEST(RasterizerForward, ZeroQuaternionIsCulledAsDegenerate) {
+  splat::ThreadPool pool(1);
+  splat::Gaussians g;
+  add_splat(g, 0, 0, 2, 0.1f, 0.9f, 1, 1, 1);
+  g.rotations[0] = 0;
+  const auto f = splat::reference_forward<float>(g, front_camera(), {}, pool);
+  EXPECT_EQ(f.stats.culled_degenerate, 1u);
+  for (float v : f.rgb) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(RasterizerForward, OutputIsBitIdenticalWhateverTheThreadCount) {
+  gslam::test::SceneOptions options;
+  options.count = 300;
+  options.width = 160;
+  options.height = 120;
+  const auto scene = gslam::test::make_random_scene<float>(options);
+  splat::ThreadPool one(1), three(3);
+  const auto a = splat::reference_forward<float>(scene.gaussians, scene.camera, {}, one);
+  const auto b = splat::reference_forward<float>(scene.gaussians, scene.camera, {}, three);
+  ASSERT_EQ(a.rgb, b.rgb);
+  ASSERT_EQ(a.alpha, b.alpha);
+  ASSERT_EQ(a.depth, b.depth);
+  ASSERT_EQ(a.sorted_ids, b.sorted_ids);
+  splat::ImageGrads d;
+  d.rgb.assign(a.rgb.size(), 0.5f);
+  d.alpha.assign(a.alpha.size(), -0.25f);
+  d.depth.assign(a.depth.size(), 0.1f);
+  const auto ga = splat::reference_backward<float>(a, d, one);
+  const auto gb = splat::reference_backward<float>(b, d, three);
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    ASSERT_EQ(splat::param_group(ga.d_gaussians, group), splat::param_group(gb.d_gaussians, group))
+        << splat::param_group_name(group);
+  }
+  ASSERT_EQ(ga.d_loss_d_pose, gb.d_loss_d_pose);
+}
+
+TEST(RasterizerForward, AlphaInUnitIntervalAndOutputsFinite) {
+  gslam::test::SceneOptions options;
+  options.count = 500;
+  options.max_opacity = 0.99;
+  const auto scene = gslam::test::make_random_scene<float>(options);
+  splat::ThreadPool pool(2);
+  const auto f = splat::reference_forward<float>(scene.gaussians, scene.camera, {}, pool);
+  for (std::size_t p = 0; p < f.alpha.size(); ++p) {
+    ASSERT_GE(f.alpha[p], 0.f) << "pixel " << p;
+    ASSERT_LE(f.alpha[p], 1.f) << "pixel " << p;
+    ASSERT_TRUE(std::isfinite(f.depth[p])) << "pixel " << p;
+  }
+  for (float v : f.rgb) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
+  splat::ThreadPool pool(1);
+  splat::Gaussians g;
+  add_splat(g, 0, 0, 2, 0.1f, 0.9f, 1, 1, 1);
+  splat::Gaussians short_means = g;
+  short_means.means.pop_back();
+  EXPECT_THROW(
+      {
+        try {
+          splat::reference_forward<float>(short_means, front_camera(), {}, pool);
+        } catch (const splat::Error& e) {
+          EXPECT_STREQ(e.what(), "rasterize: means has 2 values, expected 3*N = 3 (N = 1 from opacity_logits)");
+          throw;
+        }
+      },
+      splat::Error);
+  splat::Gaussians nan = g;
+  nan.log_scales[1] = NAN;
+  EXPECT_THROW(
+      {
+        try {
+          splat::reference_forward<float>(nan, front_camera(), {}, pool);
+        } catch (const splat::Error& e) {
+          EXPECT_NE(std::string(e.what()).find("log_scales of Gaussian 0 is nan"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      splat::Error);
+  splat::Camera zero = front_camera();
+  zero.width = 0;
+  EXPECT_THROW(
+      {
+        try {
+          splat::reference_forward<float>(g, zero, {}, pool);
+        } catch (const splat::Error& e) {
+          EXPECT_NE(std::string(e.what()).find("image size is 0x48"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      splat::Error);
+}
+
+}  // namespace

@@ -1,0 +1,37 @@
+#include "support/safetensors.h"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace gslam::test {
+
+std::map<std::string, Tensor> read_safetensors(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open " + path.string());
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  uint64_t header_len = 0;
+  if (bytes.size() < 8) throw std::runtime_error(path.string() + ": truncated");
+  std::memcpy(&header_len, bytes.data(), 8);
+  if (8 + header_len > bytes.size()) throw std::runtime_error(path.string() + ": bad header");
+  const auto header = nlohmann::json::parse(bytes.begin() + 8, bytes.begin() + 8 + long(header_len));
+  const char* data = bytes.data() + 8 + header_len;
+  std::map<std::string, Tensor> tensors;
+  for (const auto& [name, info] : header.items()) {
+    if (name == "__metadata__") continue;
+    if (info.at("dtype") != "F32") throw std::runtime_error(name + ": dtype is not F32");
+    Tensor t;
+    t.shape = info.at("shape").get<std::vector<long>>();
+    const auto offsets = info.at("data_offsets").get<std::vector<std::size_t>>();
+    t.values.resize((offsets[1] - offsets[0]) / 4);
+    std::memcpy(t.values.data(), data + offsets[0], offsets[1] - offsets[0]);
+    tensors.emplace(name, std::move(t));
+  }
+  return tensors;
+}
+
+}  // namespace gslam::test
