@@ -14,7 +14,8 @@ function(gslam_target_options target)
     endif()
   endif()
   # Lets `#pragma omp simd` loops call the vectorised libm (libmvec) without OpenMP threads.
-  target_compile_options(${target} PRIVATE -fopenmp-simd -fno-math-errno)
+  # -fno-trapping-math lets GCC if-convert float selects (we never read FP exception flags).
+  target_compile_options(${target} PRIVATE -fopenmp-simd -fno-math-errno -fno-trapping-math)
   if(GSLAM_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=${GSLAM_SANITIZE} -fno-omit-frame-pointer
                                              -fno-sanitize-recover=all)

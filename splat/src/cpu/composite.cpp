@@ -1,7 +1,9 @@
 // Front-to-back alpha compositing per 16x16 tile, and its backward pass. Within a tile the loop
 // runs splat by splat over the tile's pixels, so the pixel loop vectorizes.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "cpu/stages.h"
 #include "shader_io.h"
@@ -31,7 +33,8 @@ Splat<T> load_splat(const ForwardResultT<T>& f, uint32_t id) {
 // Tile-local pixel rectangle [x0, x1) x [y0, y1) worth evaluating for a splat: its extent box
 // grown by one pixel. Outside the extent box alpha < kAlphaMin analytically (the extent is
 // where opacity * exp(-sigma) reaches kAlphaMin), so this equals evaluating the whole tile;
-// the one-pixel margin keeps rounding at the box edge from changing any pixel.
+// the one-pixel margin keeps rounding at the box edge from changing any pixel. The loops below
+// cut rows only and evaluate whole 16-pixel rows, one vector each.
 struct PixelRect {
   int x0, y0, x1, y1;
   bool empty() const { return x0 >= x1 || y0 >= y1; }
@@ -50,11 +53,32 @@ PixelRect splat_rect(const ForwardResultT<T>& f, uint32_t id, int tile_x0, int t
 }
 
 // Per-pixel evaluation shared by forward and backward: offset, Mahalanobis term and alpha.
+// The pixel loops below are written as single float selects (no &&, no bool lanes): GCC 12
+// otherwise gives up vectorizing them.
 template <typename T>
 struct PixelEval {
-  T dx, dy, sigma, gauss, alpha;
-  bool counts;  // sigma >= 0 and alpha >= kAlphaMin: the splat blends into this pixel
+  T dx, dy, sigma, gauss;
+  T alpha;  // min(kAlphaMax, opacity * gauss), or 0 where sigma < 0 (never blended)
+  T raw_alpha;  // opacity * gauss before the cap
 };
+
+// exp(x) for x <= 0. Float: Cephes' range reduction and minimax polynomial (~2 ulp), written as
+// plain arithmetic so the pixel loop vectorizes (libm's expf does not without -ffast-math).
+// Double: std::exp, for gradient checks.
+inline float exp_nonpositive(float x) {
+  x = std::max(x, -87.f);  // below this the result is under 2^-126 and would flush anyway
+  const float n = std::floor(x * 1.44269504088896341f + 0.5f);
+  const float r = x - n * 0.693359375f + n * 2.12194440e-4f;  // x - n ln2, in two parts
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * r * r + r + 1.f;
+  return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
+}
+inline double exp_nonpositive(double x) { return std::exp(x); }
 
 template <typename T>
 inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
@@ -62,9 +86,9 @@ inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
   e.dx = s.mx - px;
   e.dy = s.my - py;
   e.sigma = T(0.5) * (s.ca * e.dx * e.dx + s.cc * e.dy * e.dy) + s.cb * e.dx * e.dy;
-  e.gauss = std::exp(-e.sigma);
-  e.alpha = std::min(T(io::kAlphaMax), s.opacity * e.gauss);
-  e.counts = e.sigma >= 0 && e.alpha >= T(io::kAlphaMin);
+  e.gauss = exp_nonpositive(-std::max(e.sigma, T(0)));
+  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
+  e.alpha = std::min(T(io::kAlphaMax), e.raw_alpha);
   return e;
 }
 
@@ -98,8 +122,9 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
     alignas(64) T trans[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
-        acc_b[kTilePixels], acc_z[kTilePixels];
-    alignas(64) int32_t last[kTilePixels], done[kTilePixels];
+        acc_b[kTilePixels], acc_z[kTilePixels], done[kTilePixels];
+    alignas(64) int32_t last[kTilePixels];
+    int row_live[kTile];  // pixels of each row still compositing
     for (int p = 0; p < kTilePixels; ++p) {
       trans[p] = 1;
       acc_r[p] = acc_g[p] = acc_b[p] = acc_z[p] = 0;
@@ -107,6 +132,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       // Pixels past the image edge start finished so they never hold the tile open.
       done[p] = (p % kTile) >= geo.width || (p / kTile) >= geo.height;
     }
+    for (int y = 0; y < kTile; ++y) row_live[y] = y < geo.height ? geo.width : 0;
     int remaining = geo.width * geo.height;
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
     for (uint32_t s = begin; s < end && remaining > 0; ++s) {
@@ -115,30 +141,40 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       if (rect.empty()) continue;
       const Splat<T> sp = load_splat(f, id);
       const int32_t next_last = static_cast<int32_t>(s + 1);
-      int finished = 0;
       for (int y = rect.y0; y < rect.y1; ++y) {
-        const T py = T(geo.y0 + y) + T(0.5);
-#pragma omp simd reduction(+ : finished)
-        for (int x = rect.x0; x < rect.x1; ++x) {
-          const int p = y * kTile + x;
-          const PixelEval<T> e = eval_pixel(sp, T(geo.x0 + x) + T(0.5), py);
-          const T t = trans[p];
+        if (row_live[y] == 0) continue;
+        const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
+        T* row_trans = trans + y * kTile;
+        T* row_done = done + y * kTile;
+        T* row_r = acc_r + y * kTile;
+        T* row_g = acc_g + y * kTile;
+        T* row_b = acc_b + y * kTile;
+        T* row_z = acc_z + y * kTile;
+        int32_t* row_last = last + y * kTile;
+#pragma omp simd
+        for (int x = 0; x < kTile; ++x) {
+          const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
+          const T t = row_trans[x];
           const T next_t = t * (1 - e.alpha);
-          const bool live = done[p] == 0 && e.counts;
-          const bool stop = live && next_t <= T(io::kTransmittanceMin);
-          const bool add = live && !stop;
-          const T weight = add ? e.alpha * t : T(0);
-          acc_r[p] += weight * sp.r;
-          acc_g[p] += weight * sp.g;
-          acc_b[p] += weight * sp.b;
-          acc_z[p] += weight * sp.z;
-          trans[p] = add ? next_t : t;
-          last[p] = add ? next_last : last[p];
-          done[p] = stop ? 1 : done[p];
-          finished += stop ? 1 : 0;
+          // 1 where the splat blends into a still-compositing pixel; 0 otherwise.
+          const T live = e.alpha >= T(io::kAlphaMin) ? 1 - row_done[x] : T(0);
+          const T stop = next_t <= T(io::kTransmittanceMin) ? live : T(0);
+          const T add = live - stop;
+          const T weight = add * e.alpha * t;
+          row_r[x] += weight * sp.r;
+          row_g[x] += weight * sp.g;
+          row_b[x] += weight * sp.b;
+          row_z[x] += weight * sp.z;
+          row_trans[x] = add > 0 ? next_t : t;
+          row_last[x] = add > 0 ? next_last : row_last[x];
+          row_done[x] += stop;
         }
+        int live = 0;
+        for (int x = 0; x < kTile; ++x) live += row_done[x] == 0;
+        const int finished = row_live[y] - live;
+        row_live[y] = live;
+        remaining -= finished;
       }
-      remaining -= finished;
     }
     for (int y = 0; y < geo.height; ++y) {
       for (int x = 0; x < geo.width; ++x) {
@@ -179,6 +215,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         v_b[kTilePixels], v_z[kTilePixels], v_final[kTilePixels];
     alignas(64) int32_t last[kTilePixels];
     int32_t max_last = 0;
+    int64_t row_max_last[kTile] = {};  // per row: one past the last splat any pixel used
     for (int p = 0; p < kTilePixels; ++p) {
       const int x = p % kTile, y = p / kTile;
       trans[p] = 1;
@@ -197,6 +234,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
                                (bg[0] * v_r[p] + bg[1] * v_g[p] + bg[2] * v_b[p]));
       last[p] = static_cast<int32_t>(f.last_contributor[o]);
       max_last = std::max(max_last, last[p]);
+      row_max_last[y] = std::max<int64_t>(row_max_last[y], last[p]);
     }
     const uint32_t begin = f.tile_ranges[tile * 2];
     for (int64_t s = int64_t(max_last) - 1; s >= int64_t(begin); --s) {
@@ -207,16 +245,19 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
       T g_mx = 0, g_my = 0, g_ca = 0, g_cb = 0, g_cc = 0, g_op = 0, g_r = 0, g_g = 0, g_b = 0,
         g_z = 0;
       for (int y = rect.y0; y < rect.y1; ++y) {
-        const T py = T(geo.y0 + y) + T(0.5);
+        if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
+        const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
+        const int row = y * kTile;
 #pragma omp simd reduction(+ : g_mx, g_my, g_ca, g_cb, g_cc, g_op, g_r, g_g, g_b, g_z)
-        for (int x = rect.x0; x < rect.x1; ++x) {
-          const int p = y * kTile + x;
-          const PixelEval<T> e = eval_pixel(sp, T(geo.x0 + x) + T(0.5), py);
-          const bool live = s < last[p] && e.counts;
-          const T one_minus = 1 - e.alpha;
-          const T inv = live ? 1 / one_minus : T(0);
-          const T t = live ? trans[p] * inv : trans[p];  // transmittance in front of the splat
-          const T weight = live ? e.alpha * t : T(0);
+        for (int x = 0; x < kTile; ++x) {
+          const int p = row + x;
+          const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
+          // 1 where the forward pass blended this splat into the pixel, else 0.
+          const T alpha_here = s < last[p] ? e.alpha : T(0);
+          const T live = alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+          const T inv = live / (1 - e.alpha);
+          const T t = live > 0 ? trans[p] * inv : trans[p];  // transmittance in front of it
+          const T weight = live * e.alpha * t;
           // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
           const T v_alpha = (sp.r * t - behind_r[p] * inv) * v_r[p] +
                             (sp.g * t - behind_g[p] * inv) * v_g[p] +
@@ -232,9 +273,9 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           behind_z[p] += weight * sp.z;
           trans[p] = t;
           // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
-          const bool smooth = live && sp.opacity * e.gauss < T(io::kAlphaMax);
-          const T v_sigma = smooth ? -sp.opacity * e.gauss * v_alpha : T(0);
-          g_op += smooth ? e.gauss * v_alpha : T(0);
+          const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
+          const T v_sigma = -smooth * sp.opacity * e.gauss * v_alpha;
+          g_op += smooth * e.gauss * v_alpha;
           g_ca += T(0.5) * e.dx * e.dx * v_sigma;
           g_cc += T(0.5) * e.dy * e.dy * v_sigma;
           g_cb += e.dx * e.dy * v_sigma;

@@ -1,7 +1,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <numeric>
 
 #include "cpu/stages.h"
 #include "shader_io.h"
@@ -46,19 +45,35 @@ void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
   f.tiles_y = static_cast<int>((f.camera.height + io::kTileSize - 1) / io::kTileSize);
   const std::size_t tiles = static_cast<std::size_t>(f.tiles_x) * f.tiles_y;
 
-  // Count per tile in fixed chunks of Gaussians, so work splits without atomics.
+  // 1. Visible splats in front-to-back order, once: sorting N splats is far cheaper than
+  //    sorting every tile's list, and a stable scatter below keeps each tile in this order.
+  std::vector<uint64_t> order;
+  order.reserve(f.stats.visible);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0) {
+      order.push_back(depth_key(f.depths[i], static_cast<uint32_t>(i)));
+    }
+  }
+  std::sort(order.begin(), order.end());
+
+  // 2. Count intersections per tile in fixed chunks of that order (no atomics; the chunking
+  //    does not depend on the thread count).
   constexpr std::size_t kChunk = 4096;
-  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  const std::size_t chunks = (order.size() + kChunk - 1) / kChunk;
   std::vector<uint32_t> chunk_counts(chunks * tiles, 0);
+  auto chunk_splats = [&](std::size_t c, auto&& visit) {
+    for (std::size_t k = c * kChunk; k < std::min(order.size(), (c + 1) * kChunk); ++k) {
+      const uint32_t id = static_cast<uint32_t>(order[k]);
+      const TileBox b = tile_box(f, id);
+      for (int ty = b.y0; ty < b.y1; ++ty)
+        for (int tx = b.x0; tx < b.x1; ++tx) visit(static_cast<std::size_t>(ty * f.tiles_x + tx), id);
+    }
+  };
   pool.parallel_for(chunks, [&](std::size_t c) {
     uint32_t* counts = &chunk_counts[c * tiles];
-    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
-      const TileBox b = tile_box(f, i);
-      for (int ty = b.y0; ty < b.y1; ++ty)
-        for (int tx = b.x0; tx < b.x1; ++tx) ++counts[ty * f.tiles_x + tx];
-    }
+    chunk_splats(c, [&](std::size_t tile, uint32_t) { ++counts[tile]; });
   });
-  // Exclusive prefix over (tile, chunk): each chunk's slot inside each tile's range.
+  // 3. Exclusive prefix over (tile, chunk): where each chunk writes inside each tile's range.
   f.tile_ranges.assign(tiles * 2, 0);
   uint32_t offset = 0;
   for (std::size_t t = 0; t < tiles; ++t) {
@@ -71,25 +86,11 @@ void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
     f.tile_ranges[t * 2 + 1] = offset;
   }
   f.stats.intersections = offset;
-
-  std::vector<uint64_t> keys(offset);
+  // 4. Scatter in depth order: each tile's list comes out sorted by (depth, index).
+  f.sorted_ids.resize(offset);
   pool.parallel_for(chunks, [&](std::size_t c) {
     uint32_t* slots = &chunk_counts[c * tiles];
-    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
-      const TileBox b = tile_box(f, i);
-      const uint64_t key = depth_key(f.depths[i], static_cast<uint32_t>(i));
-      for (int ty = b.y0; ty < b.y1; ++ty)
-        for (int tx = b.x0; tx < b.x1; ++tx) keys[slots[ty * f.tiles_x + tx]++] = key;
-    }
-  });
-  f.sorted_ids.resize(offset);
-  pool.parallel_for(tiles, [&](std::size_t t) {
-    const auto begin = keys.begin() + f.tile_ranges[t * 2];
-    const auto end = keys.begin() + f.tile_ranges[t * 2 + 1];
-    std::sort(begin, end);
-    for (auto it = begin; it != end; ++it) {
-      f.sorted_ids[static_cast<std::size_t>(it - keys.begin())] = static_cast<uint32_t>(*it);
-    }
+    chunk_splats(c, [&](std::size_t tile, uint32_t id) { f.sorted_ids[slots[tile]++] = id; });
   });
 }
 
