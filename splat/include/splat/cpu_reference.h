@@ -11,8 +11,21 @@ ForwardResultT<Scalar> reference_forward(const GaussiansViewT<Scalar>& gaussians
                                          const Camera& camera, const RenderSettings& settings,
                                          ThreadPool& pool);
 
+// Memory reference_backward can reuse across calls (per-intersection gradients).
+template <typename Scalar>
+struct BackwardScratch {
+  std::vector<Scalar> intersections;
+};
+
 template <typename Scalar>
 BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward,
-                                           const ImageGradsT<Scalar>& d_image, ThreadPool& pool);
+                                           const ImageGradsT<Scalar>& d_image, ThreadPool& pool,
+                                           BackwardScratch<Scalar>* scratch = nullptr);
+
+// Jacobian of every output pixel with respect to the camera pose (left perturbation
+// T_cam_world <- exp([v, w]) T_cam_world), by forward-mode differentiation:
+// [H, W, 5, 6] for (r, g, b, depth, alpha) x (v, w).
+template <typename Scalar>
+std::vector<Scalar> reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool);
 
 }  // namespace splat

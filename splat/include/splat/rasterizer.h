@@ -101,6 +101,9 @@ class Rasterizer {
   // Gradients of a loss given its gradients with respect to the forward outputs.
   // Throws splat::Error if the image gradients do not match the forward result's size.
   virtual BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) = 0;
+  // Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the camera pose (the left
+  // perturbation above), [H, W, 5, 6]: what Gauss-Newton pose tracking needs.
+  virtual std::vector<float> pose_jacobian(const ForwardResult& forward) = 0;
 };
 
 struct CpuOptions {

@@ -11,6 +11,9 @@
 namespace splat::cpu {
 namespace {
 
+// Gradient slots per intersection in the backward pass.
+enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
+
 constexpr int kTile = static_cast<int>(io::kTileSize);
 constexpr int kTilePixels = kTile * kTile;
 
@@ -195,13 +198,14 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
 
 template <typename T>
 ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<T>& d_image,
-                                  ThreadPool& pool) {
+                                  ThreadPool& pool, std::vector<T>& scratch) {
   const int w = f.width, h = f.height;
   const std::size_t n = f.gaussians.size();
   // Gradients per intersection (sorted position): every intersection belongs to one tile, so
   // tiles write disjoint slots; the per-Gaussian sum below runs in a fixed order.
-  enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
-  std::vector<T> isect(f.sorted_ids.size() * kSlots, 0);
+  // Every slot of every tile is written below, so the reused buffer needs no clearing.
+  std::vector<T>& isect = scratch;
+  if (isect.size() < f.sorted_ids.size() * kSlots) isect.resize(f.sorted_ids.size() * kSlots);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
@@ -242,13 +246,13 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
       const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
       if (rect.empty()) continue;
       const Splat<T> sp = load_splat(f, id);
-      T g_mx = 0, g_my = 0, g_ca = 0, g_cb = 0, g_cc = 0, g_op = 0, g_r = 0, g_g = 0, g_b = 0,
-        g_z = 0;
+      // Per-lane partial sums over the rows, reduced once per splat (in a fixed order).
+      alignas(64) T lanes[kSlots][kTile] = {};
       for (int y = rect.y0; y < rect.y1; ++y) {
         if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
         const int row = y * kTile;
-#pragma omp simd reduction(+ : g_mx, g_my, g_ca, g_cb, g_cc, g_op, g_r, g_g, g_b, g_z)
+#pragma omp simd
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
@@ -263,10 +267,10 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
                             (sp.g * t - behind_g[p] * inv) * v_g[p] +
                             (sp.b * t - behind_b[p] * inv) * v_b[p] +
                             (sp.z * t - behind_z[p] * inv) * v_z[p] + v_final[p] * inv;
-          g_r += weight * v_r[p];
-          g_g += weight * v_g[p];
-          g_b += weight * v_b[p];
-          g_z += weight * v_z[p];
+          lanes[kR][x] += weight * v_r[p];
+          lanes[kG][x] += weight * v_g[p];
+          lanes[kB][x] += weight * v_b[p];
+          lanes[kZ][x] += weight * v_z[p];
           behind_r[p] += weight * sp.r;
           behind_g[p] += weight * sp.g;
           behind_b[p] += weight * sp.b;
@@ -275,26 +279,24 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
           const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
           const T v_sigma = -smooth * sp.opacity * e.gauss * v_alpha;
-          g_op += smooth * e.gauss * v_alpha;
-          g_ca += T(0.5) * e.dx * e.dx * v_sigma;
-          g_cc += T(0.5) * e.dy * e.dy * v_sigma;
-          g_cb += e.dx * e.dy * v_sigma;
-          g_mx += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
-          g_my += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
+          lanes[kOpacity][x] += smooth * e.gauss * v_alpha;
+          lanes[kCa][x] += T(0.5) * e.dx * e.dx * v_sigma;
+          lanes[kCc][x] += T(0.5) * e.dy * e.dy * v_sigma;
+          lanes[kCb][x] += e.dx * e.dy * v_sigma;
+          lanes[kMx][x] += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
+          lanes[kMy][x] += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
         }
       }
       T* out = &isect[static_cast<std::size_t>(s) * kSlots];
-      out[kMx] = g_mx;
-      out[kMy] = g_my;
-      out[kCa] = g_ca;
-      out[kCb] = g_cb;
-      out[kCc] = g_cc;
-      out[kOpacity] = g_op;
-      out[kR] = g_r;
-      out[kG] = g_g;
-      out[kB] = g_b;
-      out[kZ] = g_z;
+      for (int k = 0; k < kSlots; ++k) {
+        T sum = 0;
+        for (int x = 0; x < kTile; ++x) sum += lanes[k][x];
+        out[k] = sum;
+      }
     }
+    // Splats behind every pixel's last contributor got no gradient.
+    std::fill(isect.begin() + std::max<int64_t>(max_last, begin) * kSlots,
+              isect.begin() + int64_t(f.tile_ranges[tile * 2 + 1]) * kSlots, T(0));
   });
 
   ScreenGrads<T> g;
@@ -323,8 +325,68 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
 template void composite_forward(ForwardResultT<float>&, ThreadPool&);
 template void composite_forward(ForwardResultT<double>&, ThreadPool&);
 template ScreenGrads<float> composite_backward(const ForwardResultT<float>&,
-                                               const ImageGradsT<float>&, ThreadPool&);
+                                               const ImageGradsT<float>&, ThreadPool&,
+                                               std::vector<float>&);
 template ScreenGrads<double> composite_backward(const ForwardResultT<double>&,
-                                                const ImageGradsT<double>&, ThreadPool&);
+                                                const ImageGradsT<double>&, ThreadPool&,
+                                                std::vector<double>&);
+
+template <typename T>
+std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen_jvp,
+                                  ThreadPool& pool) {
+  const int w = f.width, h = f.height;
+  constexpr int kOut = 5;  // r, g, b, depth, alpha
+  std::vector<T> out(static_cast<std::size_t>(w) * h * kOut * 6, T(0));
+  const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
+                   T(f.settings.background[2])};
+  pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
+    const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
+    const uint32_t begin = f.tile_ranges[tile * 2];
+    for (int y = 0; y < geo.height; ++y) {
+      for (int x = 0; x < geo.width; ++x) {
+        const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
+        const T px = T(geo.x0 + x) + T(0.5), py = T(geo.y0 + y) + T(0.5);
+        // Front to back: out = sum_j c_j a_j T_j with T_j = prod_{k<j} (1 - a_k), so
+        // d out = sum_j T_j (dc_j a_j + c_j da_j + c_j a_j dlogT_j), dlogT_j = -sum da_k/(1-a_k).
+        T trans = 1, d_log_t[6] = {}, d_rgb[3][6] = {}, d_z[6] = {};
+        for (uint32_t s = begin; s < f.last_contributor[o]; ++s) {
+          const uint32_t id = f.sorted_ids[s];
+          const Splat<T> sp = load_splat(f, id);
+          const PixelEval<T> e = eval_pixel(sp, px, py);
+          if (!(e.alpha >= T(io::kAlphaMin))) continue;  // not blended in the forward pass
+          const T* jac = &screen_jvp[static_cast<std::size_t>(id) * kScreenValues * 6];
+          const T weight = e.alpha * trans;
+          const T smooth = e.raw_alpha < T(io::kAlphaMax) ? T(1) : T(0);
+          const T color[3] = {sp.r, sp.g, sp.b};
+          for (int k = 0; k < 6; ++k) {
+            const T d_sigma = (sp.ca * e.dx + sp.cb * e.dy) * jac[0 * 6 + k] +
+                              (sp.cc * e.dy + sp.cb * e.dx) * jac[1 * 6 + k] +
+                              T(0.5) * e.dx * e.dx * jac[2 * 6 + k] + e.dx * e.dy * jac[3 * 6 + k] +
+                              T(0.5) * e.dy * e.dy * jac[4 * 6 + k];
+            const T d_alpha = -smooth * e.raw_alpha * d_sigma;
+            const T d_weight = trans * (d_alpha + e.alpha * d_log_t[k]);
+            for (int c = 0; c < 3; ++c) d_rgb[c][k] += d_weight * color[c] + weight * jac[(6 + c) * 6 + k];
+            d_z[k] += d_weight * sp.z + weight * jac[5 * 6 + k];
+            d_log_t[k] -= d_alpha / (1 - e.alpha);
+          }
+          trans *= 1 - e.alpha;
+        }
+        T* row = &out[o * kOut * 6];
+        for (int k = 0; k < 6; ++k) {
+          const T d_final = trans * d_log_t[k];  // d T_final
+          for (int c = 0; c < 3; ++c) row[c * 6 + k] = d_rgb[c][k] + bg[c] * d_final;
+          row[3 * 6 + k] = d_z[k];
+          row[4 * 6 + k] = -d_final;
+        }
+      }
+    }
+  });
+  return out;
+}
+
+template std::vector<float> composite_pose_jvp(const ForwardResultT<float>&, const std::vector<float>&,
+                                               ThreadPool&);
+template std::vector<double> composite_pose_jvp(const ForwardResultT<double>&,
+                                                const std::vector<double>&, ThreadPool&);
 
 }  // namespace splat::cpu

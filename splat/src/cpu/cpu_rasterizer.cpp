@@ -18,11 +18,16 @@ class CpuRasterizer final : public Rasterizer {
   }
 
   BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) override {
-    return reference_backward(forward, d_image, pool_);
+    return reference_backward(forward, d_image, pool_, &scratch_);
+  }
+
+  std::vector<float> pose_jacobian(const ForwardResult& forward) override {
+    return reference_pose_jacobian(forward, pool_);
   }
 
  private:
   ThreadPool pool_;
+  BackwardScratch<float> scratch_;
 };
 
 }  // namespace

@@ -266,4 +266,82 @@ template void project_backward(const ForwardResultT<float>&, const ScreenGrads<f
 template void project_backward(const ForwardResultT<double>&, const ScreenGrads<double>&,
                                BackwardResultT<double>&, ThreadPool&);
 
+template <typename T>
+std::vector<T> project_pose_jvp(const ForwardResultT<T>& frame, ThreadPool& pool) {
+  const GaussiansViewT<T>& g = frame.gaussians;
+  const std::size_t n = g.size();
+  const CameraModel<T> cam(frame.camera);
+  const int degree = effective_degree(g.sh_degree, frame.settings);
+  const int stride_k = sh_coeff_count(g.sh_degree);
+  std::vector<T> out(n * kScreenValues * 6, T(0));
+  constexpr std::size_t kChunk = 1024;
+  pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
+      if (frame.radii[i * 2] <= 0 && frame.radii[i * 2 + 1] <= 0) continue;
+      T* jac = &out[i * kScreenValues * 6];
+      const Vec3<T> p_world = load3(g.means, i);
+      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      const Vec4<T> q = load4(g.rotations, i);
+      const Mat3<T> sigma = covariance_3d(q / glm::length(q), load3(g.log_scales, i));
+      const Mat3<T> sigma_cam = cam.rotation * sigma * glm::transpose(cam.rotation);
+      const PerspectiveProjection<T>& proj = cam.projection;
+      T u, v;
+      bool u_free, v_free;
+      proj.clamped_ratios(p, u, v, u_free, v_free);
+      const Mat2x3<T> j = proj.jacobian(p);
+      const Vec3<T> conic(frame.conics[i * 3], frame.conics[i * 3 + 1], frame.conics[i * 3 + 2]);
+      const Mat2<T> qm(conic[0], conic[1], conic[1], conic[2]);
+      const T rz = 1 / p.z, rz2 = rz * rz;
+
+      // Colour: only the translation moves the camera centre (d centre = -W^T dv).
+      const Vec3<T> dir = p_world - cam.position;
+      const T dir_len = glm::length(dir);
+      const int used_degree = dir_len > 0 && frame.settings.sh_direction_gradient ? degree : 0;
+      Vec3<T> d_color_d_dir[3] = {Vec3<T>(0), Vec3<T>(0), Vec3<T>(0)};  // per channel
+      if (used_degree > 0) {
+        const Vec3<T> unit = dir / dir_len;
+        T basis[16];
+        sh_basis(used_degree, unit, basis);
+        for (int c = 0; c < 3; ++c) {
+          T raw = T(0.5), w[16] = {};
+          for (int k = 0; k < sh_coeff_count(used_degree); ++k) {
+            w[k] = g.sh[(i * stride_k + k) * 3 + c];
+            raw += basis[k] * w[k];
+          }
+          if (raw >= 0) d_color_d_dir[c] = normalize_vjp(dir, sh_basis_vjp(used_degree, unit, w));
+        }
+      }
+
+      for (int k = 0; k < 6; ++k) {
+        // Tangent of the perturbation: dp = dv + w x p, dSigma_cam = [w]x S - S [w]x.
+        Vec3<T> dv(0), dw(0);
+        (k < 3 ? dv : dw)[k % 3] = 1;
+        const Vec3<T> dp = dv + glm::cross(dw, p);
+        const Mat3<T> wx(0, dw.z, -dw.y, -dw.z, 0, dw.x, dw.y, -dw.x, 0);  // columns of [w]x
+        const Mat3<T> d_sigma_cam = wx * sigma_cam - sigma_cam * wx;
+        // mean2d = (fx x/z + cx, fy y/z + cy)
+        const T d_mx = proj.fx * (dp.x * rz - p.x * dp.z * rz2);
+        const T d_my = proj.fy * (dp.y * rz - p.y * dp.z * rz2);
+        // J = [[fx/z, 0, -fx c(x/z)/z], [0, fy/z, -fy c(y/z)/z]], c the clamp (c' = 0 or 1).
+        const T du = u_free ? dp.x * rz - p.x * dp.z * rz2 : T(0);
+        const T dvv = v_free ? dp.y * rz - p.y * dp.z * rz2 : T(0);
+        const Mat2x3<T> dj(-proj.fx * dp.z * rz2, 0, 0, -proj.fy * dp.z * rz2,
+                           -proj.fx * (du * rz - u * dp.z * rz2), -proj.fy * (dvv * rz - v * dp.z * rz2));
+        const Mat2<T> d_cov = dj * sigma_cam * glm::transpose(j) + j * d_sigma_cam * glm::transpose(j) +
+                              j * sigma_cam * glm::transpose(dj);
+        const Mat2<T> d_conic = -(qm * d_cov * qm);
+        const Vec3<T> d_dir = glm::transpose(cam.rotation) * dv;
+        const T values[kScreenValues] = {d_mx, d_my, d_conic[0][0], d_conic[1][0], d_conic[1][1], dp.z,
+                                         glm::dot(d_color_d_dir[0], d_dir), glm::dot(d_color_d_dir[1], d_dir),
+                                         glm::dot(d_color_d_dir[2], d_dir)};
+        for (int s = 0; s < kScreenValues; ++s) jac[s * 6 + k] = values[s];
+      }
+    }
+  });
+  return out;
+}
+
+template std::vector<float> project_pose_jvp(const ForwardResultT<float>&, ThreadPool&);
+template std::vector<double> project_pose_jvp(const ForwardResultT<double>&, ThreadPool&);
+
 }  // namespace splat::cpu

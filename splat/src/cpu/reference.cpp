@@ -24,7 +24,8 @@ ForwardResultT<Scalar> reference_forward(const GaussiansViewT<Scalar>& gaussians
 
 template <typename Scalar>
 BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward,
-                                           const ImageGradsT<Scalar>& d_image, ThreadPool& pool) {
+                                           const ImageGradsT<Scalar>& d_image, ThreadPool& pool,
+                                           BackwardScratch<Scalar>* scratch) {
   const std::size_t pixels = static_cast<std::size_t>(forward.width) * forward.height;
   auto check = [&](const std::vector<Scalar>& v, std::size_t channels, const char* name) {
     if (!v.empty() && v.size() != pixels * channels) {
@@ -38,18 +39,30 @@ BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward
   check(d_image.alpha, 1, "alpha");
   check(d_image.depth, 1, "depth");
   BackwardResultT<Scalar> out;
-  const cpu::ScreenGrads<Scalar> screen = cpu::composite_backward(forward, d_image, pool);
+  BackwardScratch<Scalar> local;
+  BackwardScratch<Scalar>& memory = scratch ? *scratch : local;
+  const cpu::ScreenGrads<Scalar> screen =
+      cpu::composite_backward(forward, d_image, pool, memory.intersections);
   cpu::project_backward(forward, screen, out, pool);
   return out;
 }
 
+template <typename Scalar>
+std::vector<Scalar> reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool) {
+  return cpu::composite_pose_jvp(forward, cpu::project_pose_jvp(forward, pool), pool);
+}
+
+template std::vector<float> reference_pose_jacobian(const ForwardResultT<float>&, ThreadPool&);
+template std::vector<double> reference_pose_jacobian(const ForwardResultT<double>&, ThreadPool&);
 template ForwardResultT<float> reference_forward(const GaussiansViewT<float>&, const Camera&,
                                                  const RenderSettings&, ThreadPool&);
 template ForwardResultT<double> reference_forward(const GaussiansViewT<double>&, const Camera&,
                                                   const RenderSettings&, ThreadPool&);
 template BackwardResultT<float> reference_backward(const ForwardResultT<float>&,
-                                                   const ImageGradsT<float>&, ThreadPool&);
+                                                   const ImageGradsT<float>&, ThreadPool&,
+                                                   BackwardScratch<float>*);
 template BackwardResultT<double> reference_backward(const ForwardResultT<double>&,
-                                                    const ImageGradsT<double>&, ThreadPool&);
+                                                    const ImageGradsT<double>&, ThreadPool&,
+                                                    BackwardScratch<double>*);
 
 }  // namespace splat

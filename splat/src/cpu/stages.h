@@ -30,14 +30,31 @@ void bin_and_sort(ForwardResultT<T>& frame, ThreadPool& pool);
 template <typename T>
 void composite_forward(ForwardResultT<T>& frame, ThreadPool& pool);
 
-// Backward of compositing: per-Gaussian gradients of the screen quantities.
+// Backward of compositing: per-Gaussian gradients of the screen quantities. `scratch` holds
+// per-intersection gradients; reusing it across calls avoids reallocating it.
 template <typename T>
 ScreenGrads<T> composite_backward(const ForwardResultT<T>& frame, const ImageGradsT<T>& d_image,
-                                  ThreadPool& pool);
+                                  ThreadPool& pool, std::vector<T>& scratch);
 
 // Backward of projection: gradients of the Gaussian parameters and of the camera pose.
 template <typename T>
 void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& screen,
                       BackwardResultT<T>& out, ThreadPool& pool);
+
+}  // namespace splat::cpu
+
+namespace splat::cpu {
+
+// Forward-mode derivatives of the screen quantities with respect to the pose (left perturbation
+// of T_cam_world), per Gaussian: [N, kScreenValues, 6] in the order mean x, mean y, conic a,
+// b, c, depth, colour r, g, b. Zero for culled Gaussians.
+inline constexpr int kScreenValues = 9;
+template <typename T>
+std::vector<T> project_pose_jvp(const ForwardResultT<T>& frame, ThreadPool& pool);
+
+// Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the pose: [H, W, 5, 6].
+template <typename T>
+std::vector<T> composite_pose_jvp(const ForwardResultT<T>& frame, const std::vector<T>& screen_jvp,
+                                  ThreadPool& pool);
 
 }  // namespace splat::cpu

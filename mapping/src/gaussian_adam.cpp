@@ -1,0 +1,97 @@
+#include "mapping/gaussian_adam.h"
+
+#include <cmath>
+#include <string>
+
+#include "splat/error.h"
+
+namespace mapping {
+
+void remove_gaussians(splat::Gaussians& map, std::span<const uint8_t> keep) {
+  if (keep.size() != map.size()) {
+    throw splat::Error("remove_gaussians: keep has " + std::to_string(keep.size()) +
+                       " entries, the map " + std::to_string(map.size()));
+  }
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    std::vector<float>& values = splat::param_group(map, group);
+    const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, map.sh_degree));
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < keep.size(); ++i) {
+      if (!keep[i]) continue;
+      for (std::size_t k = 0; k < width; ++k) values[out * width + k] = values[i * width + k];
+      ++out;
+    }
+    values.resize(out * width);
+  }
+}
+
+void GaussianAdam::append(std::size_t n, int sh_degree) {
+  m_.sh_degree = v_.sh_degree = sh_degree;
+  m_.resize(steps_.size() + n);
+  v_.resize(steps_.size() + n);
+  steps_.resize(steps_.size() + n, 0);
+}
+
+void GaussianAdam::remove(std::span<const uint8_t> keep) {
+  if (keep.size() != steps_.size()) {
+    throw splat::Error("GaussianAdam::remove: keep has " + std::to_string(keep.size()) +
+                       " entries, the optimizer " + std::to_string(steps_.size()));
+  }
+  remove_gaussians(m_, keep);
+  remove_gaussians(v_, keep);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i]) steps_[out++] = steps_[i];
+  steps_.resize(out);
+}
+
+void GaussianAdam::ensure_layout(const splat::Gaussians& map) {
+  if (steps_.empty() && m_.empty()) {
+    append(map.size(), map.sh_degree);  // first step: state for the whole map
+  }
+  if (map.size() != steps_.size() || map.sh_degree != m_.sh_degree) {
+    throw splat::Error("GaussianAdam::step: the map has " + std::to_string(map.size()) +
+                       " Gaussians (SH degree " + std::to_string(map.sh_degree) +
+                       "), the optimizer state " + std::to_string(steps_.size()) +
+                       "; call append/remove with every change to the map");
+  }
+}
+
+void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads) {
+  ensure_layout(map);
+  splat::validate_sizes(splat::GaussiansView(grads), "GaussianAdam::step gradients");
+  if (grads.size() != map.size() || grads.sh_degree != map.sh_degree) {
+    throw splat::Error("GaussianAdam::step: gradients for " + std::to_string(grads.size()) +
+                       " Gaussians, map has " + std::to_string(map.size()));
+  }
+  const std::size_t n = map.size();
+  std::vector<double> bias1(n), bias2(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = ++steps_[i];
+    bias1[i] = 1 - std::pow(config_.hyper.beta1, t);
+    bias2[i] = 1 - std::pow(config_.hyper.beta2, t);
+  }
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    std::vector<float>& p = splat::param_group(map, group);
+    const std::vector<float>& g = splat::param_group(grads, group);
+    std::vector<float>& m = splat::param_group(m_, group);
+    std::vector<float>& v = splat::param_group(v_, group);
+    const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, map.sh_degree));
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t c = 0; c < width; ++c) {
+        double lr = 0;
+        switch (group) {
+          case splat::ParamGroup::kMeans: lr = config_.means; break;
+          case splat::ParamGroup::kLogScales: lr = config_.log_scales; break;
+          case splat::ParamGroup::kRotations: lr = config_.rotations; break;
+          case splat::ParamGroup::kOpacityLogits: lr = config_.opacity_logits; break;
+          case splat::ParamGroup::kSh: lr = c < 3 ? config_.sh_dc : config_.sh_rest; break;
+        }
+        const std::size_t j = i * width + c;
+        splat::adam_update(p[j], g[j], m[j], v[j], lr, bias1[i], bias2[i], config_.hyper);
+      }
+    }
+  }
+}
+
+}  // namespace mapping

@@ -1,0 +1,41 @@
+#pragma once
+#include <span>
+
+namespace splat {
+
+// Image losses with their gradients. Images are flat [H, W, C]. Each function returns the
+// weighted loss and ADDS weight * dLoss/dprediction into `grad` (same shape as the prediction),
+// so several losses can share one gradient buffer. `mask` is [H, W] (empty = every pixel);
+// a pixel counts where mask > 0. Means are over the counted pixels and channels; with no counted
+// pixel the loss is 0. Sizes are checked (splat::Error).
+
+// mean |pred - target|
+template <typename T>
+double l1_loss(std::span<const T> pred, std::span<const T> target, int channels,
+               std::span<const T> mask, std::span<T> grad, double weight = 1.0);
+
+// mean (pred - target)^2
+template <typename T>
+double l2_loss(std::span<const T> pred, std::span<const T> target, int channels,
+               std::span<const T> mask, std::span<T> grad, double weight = 1.0);
+
+// Depth L1 over pixels with a measurement (target > 0) and mask > 0: mean |pred - target|.
+template <typename T>
+double depth_l1_loss(std::span<const T> pred, std::span<const T> target, std::span<const T> mask,
+                     std::span<T> grad, double weight = 1.0);
+
+// 1 - SSIM, SSIM averaged over pixels and channels, with an 11x11 Gaussian window (sigma 1.5),
+// zero padding at the borders and C1 = 0.01^2, C2 = 0.03^2 (the 3DGS training loss).
+template <typename T>
+double dssim_loss(std::span<const T> pred, std::span<const T> target, int width, int height,
+                  int channels, std::span<T> grad, double weight = 1.0);
+
+// Mask of pixels whose rendered alpha exceeds `threshold` (1 or 0), [H, W].
+template <typename T>
+void alpha_mask(std::span<const T> alpha, T threshold, std::span<T> mask);
+
+// Peak signal-to-noise ratio in dB for values in [0, 1] (over the mask, if given).
+double psnr(std::span<const float> pred, std::span<const float> target, int channels,
+            std::span<const float> mask = {});
+
+}  // namespace splat

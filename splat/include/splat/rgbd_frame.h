@@ -1,0 +1,28 @@
+#pragma once
+#include <vector>
+
+#include "splat/camera.h"
+
+namespace splat {
+
+// One RGB-D observation: colour in [0, 1] and depth in metres (0 = no measurement), both
+// [H, W(, 3)], registered to the same pinhole camera. `camera` carries the intrinsics and
+// size; its pose is not used.
+struct RgbdFrame {
+  double timestamp = 0;
+  Camera camera;
+  std::vector<float> rgb;    // [H, W, 3]
+  std::vector<float> depth;  // [H, W]
+  int width() const { return camera.width; }
+  int height() const { return camera.height; }
+};
+
+// The frame at 1/factor resolution: colour averaged over each block, depth averaged over its
+// valid pixels (0 if none), intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
+// round down.
+RgbdFrame downsample(const RgbdFrame& frame, int factor);
+
+// The frame's intrinsics with a pose.
+Camera posed(const Camera& intrinsics, const Eigen::Isometry3d& T_cam_world);
+
+}  // namespace splat

@@ -1,0 +1,187 @@
+#include "splat/losses.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "splat/error.h"
+
+namespace splat {
+namespace {
+
+template <typename T>
+void check_sizes(const char* name, std::size_t pred, std::size_t target, std::size_t grad,
+                 std::size_t mask, std::size_t pixels) {
+  if (target != pred || grad != pred || (mask != 0 && mask != pixels)) {
+    throw Error(std::string(name) + ": sizes differ: prediction " + std::to_string(pred) +
+                ", target " + std::to_string(target) + ", gradient " + std::to_string(grad) +
+                ", mask " + std::to_string(mask) + " (expected " + std::to_string(pixels) +
+                " pixels)");
+  }
+}
+
+// Shared body of the per-pixel losses: f(residual) and its derivative, over counted pixels.
+template <typename T, typename Value, typename Derivative>
+double pointwise_loss(const char* name, std::span<const T> pred, std::span<const T> target,
+                      int channels, std::span<const T> mask, std::span<T> grad, double weight,
+                      bool needs_measurement, Value value, Derivative derivative) {
+  if (channels < 1) throw Error(std::string(name) + ": channels is " + std::to_string(channels));
+  const std::size_t pixels = pred.size() / static_cast<std::size_t>(channels);
+  check_sizes<T>(name, pred.size(), target.size(), grad.size(), mask.size(), pixels);
+  auto counted = [&](std::size_t p, std::size_t i) {
+    return (mask.empty() || mask[p] > 0) && (!needs_measurement || target[i] > 0);
+  };
+  std::size_t count = 0;
+  for (std::size_t p = 0; p < pixels; ++p)
+    for (int c = 0; c < channels; ++c) count += counted(p, p * channels + c);
+  if (count == 0) return 0;
+  const double scale = weight / static_cast<double>(count);
+  double sum = 0;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    for (int c = 0; c < channels; ++c) {
+      const std::size_t i = p * channels + c;
+      if (!counted(p, i)) continue;
+      const double r = double(pred[i]) - double(target[i]);
+      sum += value(r);
+      grad[i] += static_cast<T>(scale * derivative(r));
+    }
+  }
+  return sum * scale;
+}
+
+double sign(double r) { return r > 0 ? 1.0 : (r < 0 ? -1.0 : 0.0); }
+
+// Separable 11-tap Gaussian (sigma 1.5) blur with zero padding; symmetric, so it is also its
+// own adjoint.
+constexpr int kRadius = 5;
+struct Window {
+  double w[2 * kRadius + 1];
+  Window() {
+    double sum = 0;
+    for (int i = -kRadius; i <= kRadius; ++i) sum += w[i + kRadius] = std::exp(-i * i / (2 * 1.5 * 1.5));
+    for (double& v : w) v /= sum;
+  }
+};
+
+void blur(const std::vector<double>& in, std::vector<double>& out, int width, int height) {
+  static const Window window;
+  std::vector<double> tmp(in.size(), 0.0);
+  out.assign(in.size(), 0.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double s = 0;
+      for (int k = -kRadius; k <= kRadius; ++k) {
+        const int xx = x + k;
+        if (xx >= 0 && xx < width) s += window.w[k + kRadius] * in[std::size_t(y) * width + xx];
+      }
+      tmp[std::size_t(y) * width + x] = s;
+    }
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double s = 0;
+      for (int k = -kRadius; k <= kRadius; ++k) {
+        const int yy = y + k;
+        if (yy >= 0 && yy < height) s += window.w[k + kRadius] * tmp[std::size_t(yy) * width + x];
+      }
+      out[std::size_t(y) * width + x] = s;
+    }
+}
+
+}  // namespace
+
+template <typename T>
+double l1_loss(std::span<const T> pred, std::span<const T> target, int channels,
+               std::span<const T> mask, std::span<T> grad, double weight) {
+  return pointwise_loss<T>("l1_loss", pred, target, channels, mask, grad, weight, false,
+                           [](double r) { return std::abs(r); }, sign);
+}
+
+template <typename T>
+double l2_loss(std::span<const T> pred, std::span<const T> target, int channels,
+               std::span<const T> mask, std::span<T> grad, double weight) {
+  return pointwise_loss<T>("l2_loss", pred, target, channels, mask, grad, weight, false,
+                           [](double r) { return r * r; }, [](double r) { return 2 * r; });
+}
+
+template <typename T>
+double depth_l1_loss(std::span<const T> pred, std::span<const T> target, std::span<const T> mask,
+                     std::span<T> grad, double weight) {
+  return pointwise_loss<T>("depth_l1_loss", pred, target, 1, mask, grad, weight, true,
+                           [](double r) { return std::abs(r); }, sign);
+}
+
+template <typename T>
+double dssim_loss(std::span<const T> pred, std::span<const T> target, int width, int height,
+                  int channels, std::span<T> grad, double weight) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  if (width < 1 || height < 1 || channels < 1) throw Error("dssim_loss: empty image");
+  check_sizes<T>("dssim_loss", pred.size(), target.size(), grad.size(), 0, pixels);
+  if (pred.size() != pixels * channels) throw Error("dssim_loss: image size does not match " + std::to_string(width) + "x" + std::to_string(height));
+  constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;
+  const double scale = weight / static_cast<double>(pixels * channels);
+  double ssim_sum = 0;
+  std::vector<double> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels);
+  std::vector<double> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
+  for (int c = 0; c < channels; ++c) {
+    for (std::size_t p = 0; p < pixels; ++p) {
+      x[p] = pred[p * channels + c];
+      y[p] = target[p * channels + c];
+      xx[p] = x[p] * x[p];
+      yy[p] = y[p] * y[p];
+      xy[p] = x[p] * y[p];
+    }
+    blur(x, mx, width, height);
+    blur(y, my, width, height);
+    blur(xx, exx, width, height);
+    blur(yy, eyy, width, height);
+    blur(xy, exy, width, height);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const double a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
+      const double b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
+      const double b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
+      const double s = a1 * a2 / (b1 * b2);
+      ssim_sum += s;
+      // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale.
+      da[p] = -scale * s * (2 * my[p] / a1 - 2 * my[p] / a2 - 2 * mx[p] / b1 + 2 * mx[p] / b2);
+      db[p] = -scale * s * (-1 / b2);
+      dc[p] = -scale * s * (2 / a2);
+    }
+    // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
+    blur(da, ga, width, height);
+    blur(db, gb, width, height);
+    blur(dc, gc, width, height);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      grad[p * channels + c] += static_cast<T>(ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p]);
+    }
+  }
+  return weight * (1 - ssim_sum / static_cast<double>(pixels * channels));
+}
+
+template <typename T>
+void alpha_mask(std::span<const T> alpha, T threshold, std::span<T> mask) {
+  if (alpha.size() != mask.size()) throw Error("alpha_mask: alpha and mask sizes differ");
+  for (std::size_t i = 0; i < alpha.size(); ++i) mask[i] = alpha[i] > threshold ? T(1) : T(0);
+}
+
+double psnr(std::span<const float> pred, std::span<const float> target, int channels,
+            std::span<const float> mask) {
+  std::vector<float> grad(pred.size(), 0.f);
+  const double mse = l2_loss<float>(pred, target, channels, mask, grad);
+  return mse > 0 ? -10.0 * std::log10(mse) : INFINITY;
+}
+
+#define GSLAM_INSTANTIATE(T)                                                                       \
+  template double l1_loss(std::span<const T>, std::span<const T>, int, std::span<const T>,        \
+                          std::span<T>, double);                                                  \
+  template double l2_loss(std::span<const T>, std::span<const T>, int, std::span<const T>,        \
+                          std::span<T>, double);                                                  \
+  template double depth_l1_loss(std::span<const T>, std::span<const T>, std::span<const T>,       \
+                                std::span<T>, double);                                            \
+  template double dssim_loss(std::span<const T>, std::span<const T>, int, int, int, std::span<T>, \
+                             double);                                                             \
+  template void alpha_mask(std::span<const T>, T, std::span<T>);
+GSLAM_INSTANTIATE(float)
+GSLAM_INSTANTIATE(double)
+#undef GSLAM_INSTANTIATE
+
+}  // namespace splat

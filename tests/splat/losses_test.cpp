@@ -1,0 +1,85 @@
+// Every loss against central differences in double, and its values on known inputs.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "splat/losses.h"
+#include "support/expect_error.h"
+#include "support/gradient_check.h"
+
+namespace {
+
+struct Images {
+  int width = 13, height = 9, channels = 3;
+  std::vector<double> pred, target, mask;
+};
+
+Images random_images(uint32_t seed, int channels = 3) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.05, 0.95);
+  Images im;
+  im.channels = channels;
+  const std::size_t n = static_cast<std::size_t>(im.width) * im.height * channels;
+  for (std::size_t i = 0; i < n; ++i) {
+    im.pred.push_back(u(rng));
+    im.target.push_back(u(rng));
+  }
+  for (int p = 0; p < im.width * im.height; ++p) im.mask.push_back(u(rng) > 0.3 ? 1.0 : 0.0);
+  return im;
+}
+
+using LossFn = std::function<double(std::span<const double>, std::span<double>)>;
+
+void check_loss(const std::string& name, Images& im, const LossFn& loss) {
+  std::vector<double> grad(im.pred.size(), 0.0);
+  loss(im.pred, grad);
+  std::vector<double> scratch(im.pred.size());
+  gslam::test::expect_gradients_match(
+      name, grad, [&](std::size_t i, double d) { im.pred[i] += d; },
+      [&] { return std::vector<double>{loss(im.pred, scratch)}; });
+}
+
+TEST(Losses, GradientsMatchFiniteDifferences) {
+  Images im = random_images(5);
+  check_loss("l1", im, [&](auto p, auto g) { return splat::l1_loss<double>(p, im.target, 3, {}, g); });
+  check_loss("l1_masked", im, [&](auto p, auto g) { return splat::l1_loss<double>(p, im.target, 3, im.mask, g, 0.7); });
+  check_loss("l2_masked", im, [&](auto p, auto g) { return splat::l2_loss<double>(p, im.target, 3, im.mask, g); });
+  check_loss("dssim", im, [&](auto p, auto g) { return splat::dssim_loss<double>(p, im.target, im.width, im.height, 3, g, 0.2); });
+  Images depth = random_images(6, 1);
+  for (std::size_t i = 0; i < depth.target.size(); i += 4) depth.target[i] = 0;  // no measurement
+  check_loss("depth_l1", depth, [&](auto p, auto g) { return splat::depth_l1_loss<double>(p, depth.target, depth.mask, g); });
+}
+
+TEST(Losses, KnownValues) {
+  const std::vector<float> pred = {0.5f, 0.5f, 1.0f, 0.0f}, target = {0.25f, 0.5f, 0.5f, 0.0f};
+  std::vector<float> grad(4, 0.f);
+  EXPECT_NEAR(splat::l1_loss<float>(pred, target, 1, {}, grad), 0.75 / 4, 1e-7);
+  const std::vector<float> mask = {1, 0, 1, 0};
+  std::fill(grad.begin(), grad.end(), 0.f);
+  EXPECT_NEAR(splat::l2_loss<float>(pred, target, 1, mask, grad), (0.0625 + 0.25) / 2, 1e-7);
+  EXPECT_EQ(grad[1], 0.f) << "masked pixels get no gradient";
+  std::fill(grad.begin(), grad.end(), 0.f);
+  // Depth: the zero target (no measurement) is ignored.
+  EXPECT_NEAR(splat::depth_l1_loss<float>(pred, target, {}, grad), 0.75 / 3, 1e-7);
+  EXPECT_EQ(grad[3], 0.f);
+  std::fill(grad.begin(), grad.end(), 0.f);
+  EXPECT_NEAR(splat::dssim_loss<float>(pred, pred, 2, 2, 1, grad), 0.0, 1e-9) << "identical images";
+  EXPECT_NEAR(splat::psnr(std::vector<float>(12, 0.5f), std::vector<float>(12, 0.6f), 3), 20.0, 1e-4);
+}
+
+TEST(Losses, RejectMismatchedSizes) {
+  std::vector<float> a(6), b(5), g(6);
+  GSLAM_EXPECT_ERROR(splat::l1_loss<float>(a, b, 3, {}, g), "l1_loss", "target 5");
+  std::vector<float> mask(3);
+  GSLAM_EXPECT_ERROR(splat::l1_loss<float>(a, a, 3, mask, g), "mask 3", "expected 2 pixels");
+}
+
+TEST(Losses, AlphaMaskThresholds) {
+  const std::vector<float> alpha = {0.1f, 0.99f, 0.5f};
+  std::vector<float> mask(3);
+  splat::alpha_mask<float>(alpha, 0.5f, mask);
+  EXPECT_EQ(mask, (std::vector<float>{0, 1, 0}));
+}
+
+}  // namespace
