@@ -9,8 +9,9 @@ function(gslam_target_options target)
     # Every target gets the same -march: Eigen's alignment must agree across translation units.
     target_compile_options(${target} PRIVATE -march=native)
     if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
-      # GCC 12 false positive inside Eigen's AVX-512 code (_mm512_undefined_* operands).
-      target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized)
+      # GCC 12 false positives inside Eigen's AVX-512 code (_mm512_undefined_* operands, and
+      # 512-bit loads of 3-vectors in Eigen::umeyama that its masking keeps in bounds).
+      target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized -Wno-array-bounds)
     endif()
   endif()
   # Lets `#pragma omp simd` loops call the vectorised libm (libmvec) without OpenMP threads.

@@ -2,6 +2,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include "splat/error.h"
+
+#include "app/eval_command.h"
+#include "app/reconstruct_command.h"
 #include "app/render_command.h"
 
 namespace app {
@@ -35,12 +39,37 @@ int run_cli(int argc, char** argv) {
   render_cmd->add_option("--background", render.background, "Background RGB r,g,b in [0, 1]")->capture_default_str();
   add_backend_options(*render_cmd, render.backend);
 
+  ReconstructOptions recon;
+  CLI::App* recon_cmd = cli.add_subcommand("reconstruct", "RGB-D SLAM: trajectory and Gaussian map from a sequence");
+  recon_cmd->add_option("dataset", recon.dataset, "TUM RGB-D folder (default: the bundled synthetic sequence)");
+  recon_cmd->add_option("--out", recon.out, "Output directory")->required();
+  recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
+  recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
+  recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
+  add_backend_options(*recon_cmd, recon.backend);
+
+  EvalOptions eval;
+  CLI::App* eval_cmd = cli.add_subcommand("eval", "Trajectory and rendering errors of a reconstruct run");
+  eval_cmd->add_option("run", eval.run, "Output directory of gslam reconstruct")->required();
+  eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth)")->required();
+  eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
+  eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  eval_cmd->add_flag("--sim3", eval.sim3, "Align with scale (similarity) instead of rigidly");
+  eval_cmd->add_option("--every", eval.every, "Measure rendering quality on every N-th frame")->capture_default_str();
+  add_backend_options(*eval_cmd, eval.backend);
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e);
   }
   if (render_cmd->parsed()) return run_render(render);
+  if (recon_cmd->parsed()) {
+    if (recon.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
+    return run_reconstruct(recon);
+  }
+  if (eval_cmd->parsed()) return run_eval(eval);
   return 2;
 }
 

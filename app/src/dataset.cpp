@@ -69,6 +69,12 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   // Calibrated colour intrinsics of the TUM Kinects (TUM RGB-D dataset documentation).
   if (!options.intrinsics.empty()) {
     apply_intrinsics(d.intrinsics, options.intrinsics);
+  } else if (std::filesystem::exists(root / "intrinsics.txt")) {
+    // gslam's extension of the TUM layout: "fx fy cx cy" on one line.
+    std::ifstream in(root / "intrinsics.txt");
+    double k[4];
+    if (!(in >> k[0] >> k[1] >> k[2] >> k[3]) || k[0] <= 0 || k[1] <= 0) fail(root / "intrinsics.txt", "expected 'fx fy cx cy'");
+    d.intrinsics.fx = k[0], d.intrinsics.fy = k[1], d.intrinsics.cx = k[2], d.intrinsics.cy = k[3];
   } else if (name.find("freiburg1") != std::string::npos) {
     d.intrinsics.fx = 517.3, d.intrinsics.fy = 516.5, d.intrinsics.cx = 318.6, d.intrinsics.cy = 255.3;
   } else if (name.find("freiburg2") != std::string::npos) {

@@ -33,6 +33,13 @@ Eigen::Isometry3d se3_exp(const Vector6d& delta) {
   return t;
 }
 
+Eigen::Isometry3d orthonormalized(const Eigen::Isometry3d& transform) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(transform.linear()).normalized().toRotationMatrix();
+  out.translation() = transform.translation();
+  return out;
+}
+
 Vector6d se3_log(const Eigen::Isometry3d& transform) {
   const Eigen::AngleAxisd aa(transform.linear());
   const Eigen::Vector3d w = aa.axis() * aa.angle();

@@ -23,6 +23,8 @@ TEST(PhotoFit, ReachesTwentyEightDecibelsOnARealFrame) {
   splat::Gaussians map;
   mapping::SeedConfig seed;
   seed.stride = 4;  // one Gaussian per 16 pixels: the fit has to grow and shape them
+  seed.scale_factor = 0.5;
+  seed.opacity = 0.7;
   mapping::seed_from_depth(frame, Eigen::Isometry3d::Identity(), seed, map);
   ASSERT_GT(map.size(), 4000u);
 

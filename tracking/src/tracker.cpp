@@ -64,8 +64,7 @@ std::vector<uint8_t> usable_pixels(const splat::ForwardResult& render, const spl
 
 // Cost (and, with a Jacobian, the normal equations) of a render against the frame over
 // `pixels` (chosen at the linearization point when null, then kept for its candidates, so a
-// step cannot lower the cost by pushing pixels out of the set). Depth is the alpha-weighted
-// render depth, compared directly: on reliable pixels alpha ~ 1.
+// step cannot lower the cost by pushing pixels out of the set).
 Linearization linearize(const splat::ForwardResult& render, const std::vector<float>* jacobian,
                         const splat::RgbdFrame& frame, const TrackingConfig& c,
                         const std::vector<uint8_t>* pixels = nullptr) {
@@ -75,16 +74,22 @@ Linearization linearize(const splat::ForwardResult& render, const std::vector<fl
   const double color_scale = std::sqrt(c.color_weight) / c.color_sigma;
   for (std::size_t p = 0; p < use.size(); ++p) {
     if (!use[p]) continue;
+    const double alpha = render.alpha[p];
     for (int ch = 0; ch < 4; ++ch) {  // r, g, b, depth
       const bool is_depth = ch == 3;
       const double scale = is_depth ? 1.0 / c.depth_sigma : color_scale;
       if (scale == 0) continue;
-      const double r = scale * (is_depth ? render.depth[p] - frame.depth[p] : render.rgb[p * 3 + ch] - frame.rgb[p * 3 + ch]);
+      // Depth: the alpha-normalized render depth D / A, unbiased where A < 1.
+      const double value = is_depth ? render.depth[p] / alpha : render.rgb[p * 3 + ch];
+      const double r = scale * (value - (is_depth ? frame.depth[p] : frame.rgb[p * 3 + ch]));
       lin.cost += huber_cost(r, c.huber);
       if (!jacobian) continue;
       const double w = huber_weight(r, c.huber);
-      Eigen::Map<const Eigen::Matrix<float, 6, 1>> row(&(*jacobian)[(p * 5 + ch) * 6]);
-      const splat::Vector6d j = row.cast<double>() * scale;
+      auto row = [&](int out) {
+        return Eigen::Map<const Eigen::Matrix<float, 6, 1>>(&(*jacobian)[(p * 5 + out) * 6]).cast<double>();
+      };
+      // d(D/A) = (dD - (D/A) dA) / A.
+      const splat::Vector6d j = scale * (is_depth ? splat::Vector6d((row(3) - value * row(4)) / alpha) : splat::Vector6d(row(ch)));
       lin.h.selfadjointView<Eigen::Upper>().rankUpdate(j, w);
       lin.b += w * r * j;
     }
@@ -119,7 +124,7 @@ void warm_up(splat::Rasterizer& rasterizer, const splat::GaussiansView& map, con
       splat::adam_update(step, lin.b[k], m[k], v[k], size, 1 - std::pow(hyper.beta1, t), 1 - std::pow(hyper.beta2, t), hyper);
       delta[k] = step;
     }
-    result.T_cam_world = splat::se3_exp(delta) * result.T_cam_world;
+    result.T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * result.T_cam_world);
     ++result.iterations;
   }
   if (config.warmup_iterations > 0) result.T_cam_world = best_pose;
@@ -154,7 +159,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
       damped.diagonal() += lambda * lin.h.diagonal().cwiseMax(1e-9);
       const splat::Vector6d delta = damped.ldlt().solve(-lin.b);
       if (!delta.allFinite()) break;
-      const Eigen::Isometry3d candidate = splat::se3_exp(delta) * result.T_cam_world;
+      const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * result.T_cam_world);
       splat::ForwardResult next = render_at(candidate);
       const double next_cost = linearize(next, nullptr, scaled, config, &lin.use).cost;
       if (next_cost < lin.cost) {

@@ -10,9 +10,10 @@ namespace mapping {
 
 struct SeedConfig {
   int stride = 2;              // one Gaussian per stride x stride pixels
-  double opacity = 0.7;        // initial opacity
-  // Isotropic scale: the footprint of `stride` pixels at the measured depth, times this.
-  double scale_factor = 0.5;
+  double opacity = 0.9;        // initial opacity: neighbours overlap into a solid silhouette
+  // Isotropic scale: the footprint of `stride` pixels at the measured depth, times this
+  // (1 = sigma equal to the spacing, so neighbouring splats overlap without gaps).
+  double scale_factor = 1.0;
   int sh_degree = 0;
 };
 

@@ -11,4 +11,8 @@ Eigen::Isometry3d se3_exp(const Vector6d& delta);
 // Inverse of se3_exp: the twist [v, omega] of a rigid transform (rotation angle below pi).
 Vector6d se3_log(const Eigen::Isometry3d& transform);
 
+// The nearest rigid transform: the rotation re-orthonormalized (through a unit quaternion).
+// Long chains of composed updates otherwise drift away from SO(3).
+Eigen::Isometry3d orthonormalized(const Eigen::Isometry3d& transform);
+
 }  // namespace splat

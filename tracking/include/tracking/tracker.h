@@ -20,7 +20,7 @@ struct TrackingConfig {
   double warmup_step_translation = 2e-3;
   double warmup_step_rotation = 2e-3;
   // Residuals are divided by these noise levels, so both terms are unitless.
-  double depth_sigma = 0.02;  // metres
+  double depth_sigma = 0.1;   // metres (Kinect depth is weighted below colour: see the note in tracker.cpp)
   double color_sigma = 0.1;   // colour units in [0, 1]
   double color_weight = 0.5;  // relative weight of the photometric term
   double huber = 2.0;         // Huber threshold in noise units (robust to outliers)

@@ -1,0 +1,60 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "mapping/mapper.h"
+#include "splat/rasterizer.h"
+#include "splat/rgbd_frame.h"
+#include "tracking/tracker.h"
+
+namespace app {
+
+struct SlamConfig {
+  tracking::TrackingConfig tracking;
+  mapping::MapperConfig mapping;
+  // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
+  // since the last keyframe.
+  int keyframe_every = 5;
+  double keyframe_translation = 0.05;  // metres
+  double keyframe_rotation_deg = 5.0;
+  SlamConfig();
+};
+
+struct FrameRecord {
+  double timestamp = 0;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  bool tracked = true;       // false: tracking failed even after the retry
+  bool retried = false;
+  std::string reason;        // why tracking failed
+  bool keyframe = false;
+  int renders = 0;
+  double tracking_ms = 0, mapping_ms = 0;
+  std::size_t gaussians = 0;
+};
+
+// RGB-D SLAM on one sequence, frame by frame: track against the map (constant-velocity start,
+// one retry with the first-order warm-up on failure), then on keyframes extend and refine the
+// map. Frames whose tracking failed keep their best pose, are reported, and never become
+// keyframes, so a bad pose does not corrupt the map.
+class SlamSystem {
+ public:
+  SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config);
+  FrameRecord process(const splat::RgbdFrame& frame);
+  const splat::Gaussians& map() const { return mapper_.map(); }
+  std::size_t keyframes_added() const { return keyframes_; }
+
+ private:
+  bool is_keyframe(const Eigen::Isometry3d& T_world_cam) const;
+
+  splat::Rasterizer& rasterizer_;
+  SlamConfig config_;
+  mapping::Mapper mapper_;
+  std::vector<Eigen::Isometry3d> poses_;  // camera to world, one per processed frame
+  Eigen::Isometry3d last_keyframe_ = Eigen::Isometry3d::Identity();
+  int since_keyframe_ = 0;
+  std::size_t keyframes_ = 0;
+};
+
+}  // namespace app

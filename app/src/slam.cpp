@@ -1,0 +1,83 @@
+#include "app/slam.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "splat/se3.h"
+
+namespace app {
+namespace {
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+SlamConfig::SlamConfig() {
+  tracking.pyramid = {2};
+  tracking.iterations = {10};
+  mapping.resolution_factor = 2;
+  mapping.iterations = 30;
+  mapping.seed.scale_factor = 0.6;
+}
+
+SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
+    : rasterizer_(rasterizer), config_(config), mapper_(rasterizer, config.mapping) {}
+
+bool SlamSystem::is_keyframe(const Eigen::Isometry3d& T_world_cam) const {
+  const Eigen::Isometry3d motion = last_keyframe_.inverse() * T_world_cam;
+  const double degrees = Eigen::AngleAxisd(motion.linear()).angle() * 180 / M_PI;
+  return since_keyframe_ >= config_.keyframe_every || motion.translation().norm() > config_.keyframe_translation ||
+         degrees > config_.keyframe_rotation_deg;
+}
+
+FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
+  FrameRecord record;
+  record.timestamp = frame.timestamp;
+  if (poses_.empty()) {
+    // The first frame defines the world frame and seeds the map.
+    const auto start = std::chrono::steady_clock::now();
+    mapper_.add_keyframe(frame, Eigen::Isometry3d::Identity());
+    record.mapping_ms = ms_since(start);
+    record.keyframe = true;
+    ++keyframes_;
+    poses_.push_back(Eigen::Isometry3d::Identity());
+    record.gaussians = mapper_.map().size();
+    return record;
+  }
+  // Constant velocity: apply the last inter-frame motion again.
+  Eigen::Isometry3d guess = poses_.back();
+  if (poses_.size() >= 2) {
+    guess = splat::orthonormalized(poses_.back() * (poses_[poses_.size() - 2].inverse() * poses_.back()));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  tracking::TrackingResult result = tracking::track_frame(rasterizer_, mapper_.map(), frame, guess.inverse(), config_.tracking);
+  record.renders = result.renders;
+  if (!result.converged) {
+    // Retry from the last pose with the first-order warm-up, which has a wider basin.
+    tracking::TrackingConfig retry = config_.tracking;
+    retry.warmup_iterations = 20;
+    const tracking::TrackingResult second = tracking::track_frame(rasterizer_, mapper_.map(), frame, poses_.back().inverse(), retry);
+    record.retried = true;
+    record.renders += second.renders;
+    if (second.converged || second.final_cost < result.final_cost) result = second;
+  }
+  record.tracking_ms = ms_since(start);
+  record.tracked = result.converged;
+  record.reason = result.reason;
+  record.T_world_cam = result.T_cam_world.inverse();
+  poses_.push_back(record.T_world_cam);
+  ++since_keyframe_;
+  if (record.tracked && is_keyframe(record.T_world_cam)) {
+    const auto map_start = std::chrono::steady_clock::now();
+    mapper_.add_keyframe(frame, result.T_cam_world);
+    record.mapping_ms = ms_since(map_start);
+    record.keyframe = true;
+    last_keyframe_ = record.T_world_cam;
+    since_keyframe_ = 0;
+    ++keyframes_;
+  }
+  record.gaussians = mapper_.map().size();
+  return record;
+}
+
+}  // namespace app

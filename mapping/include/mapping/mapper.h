@@ -1,0 +1,72 @@
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "mapping/gaussian_adam.h"
+#include "mapping/initialize.h"
+#include "splat/rasterizer.h"
+#include "splat/rgbd_frame.h"
+
+namespace mapping {
+
+struct MapperConfig {
+  int resolution_factor = 2;  // keyframes are stored and optimized at 1/factor resolution
+  int iterations = 15;        // Adam steps per keyframe
+  int window = 4;             // keyframes per optimization window (the new one included)
+  std::size_t max_keyframes = 12;  // stored keyframes; the least covisible is dropped beyond
+  double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
+  // Densification: seed where the render's silhouette is below this, or where the measured
+  // depth is in front of the render by more than depth_error_factor x the median error.
+  double densify_alpha = 0.5;
+  double depth_error_factor = 10.0;
+  SeedConfig seed;  // stride at the mapping resolution
+  // Pruning after each optimization.
+  double prune_opacity = 0.005;
+  double prune_max_scale = 0.5;  // metres
+  AdamConfig adam;
+  uint32_t random_seed = 1;
+  void validate() const;
+};
+
+struct MappingStats {
+  std::size_t added = 0, pruned = 0;
+  int iterations = 0;
+  double final_loss = 0;
+  std::size_t window = 0;
+};
+
+// Builds and refines the map from keyframes with known poses. Memory apart from the map is
+// bounded by max_keyframes.
+class Mapper {
+ public:
+  Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config);
+
+  // Adds Gaussians for what the keyframe sees that the map lacks, stores it, optimizes the map
+  // over a window of covisible keyframes and prunes. The first keyframe seeds the map.
+  MappingStats add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
+
+  const splat::Gaussians& map() const { return map_; }
+  std::size_t keyframes() const { return keyframes_.size(); }
+
+ private:
+  struct Keyframe {
+    splat::RgbdFrame frame;  // at the mapping resolution
+    Eigen::Isometry3d T_cam_world;
+  };
+  std::size_t densify(const Keyframe& kf);
+  std::vector<const Keyframe*> window_for(const Keyframe& newest);
+  double optimize_step(const Keyframe& kf);
+  std::size_t prune();
+
+  splat::Rasterizer& rasterizer_;
+  MapperConfig config_;
+  splat::Gaussians map_;
+  GaussianAdam adam_;
+  std::deque<Keyframe> keyframes_;
+  std::mt19937 rng_;
+};
+
+}  // namespace mapping
