@@ -1,0 +1,97 @@
+#include <gtest/gtest.h>
+
+#include "app/dataset.h"
+#include "app/evaluation.h"
+#include "app/synthetic_sequence.h"
+#include "splat/se3.h"
+#include "support/expect_error.h"
+#include "support/temp_dir.h"
+#include "support/test_data.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+TEST(Association, PairsNearestWithinTwentyMillisecondsOnce) {
+  const std::vector<double> rgb = {0.00, 0.033, 0.066, 0.100};
+  const std::vector<double> depth = {0.005, 0.030, 0.031, 0.150};
+  const auto pairs = app::associate(rgb, depth);
+  // 0.00-0.005, 0.033-0.031 (closest), 0.066 has none within 0.02 (0.030 is taken), 0.100 none.
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0], std::make_pair(std::size_t{0}, std::size_t{0}));
+  EXPECT_EQ(pairs[1], std::make_pair(std::size_t{1}, std::size_t{2}));
+}
+
+TEST(TumDataset, RealSequenceSkipsMissingFilesAndFindsGroundTruth) {
+  GSLAM_REQUIRE_SHARED_DATA(root, "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy");
+  const app::Dataset d = app::open_dataset(root);
+  EXPECT_EQ(d.format, "tum");
+  EXPECT_DOUBLE_EQ(d.intrinsics.fx, 535.4);  // freiburg3 preset from the folder name
+  EXPECT_EQ(d.intrinsics.width, 640);
+  EXPECT_GT(d.skipped_missing, 4000u) << "rgb.txt/depth.txt list the whole sequence";
+  EXPECT_EQ(d.entries.size(), 193u) << "SOURCE.md: 193 colour frames have depth within 20 ms";
+  std::size_t with_truth = 0;
+  for (const auto& e : d.entries) with_truth += e.T_world_cam_truth.has_value();
+  EXPECT_EQ(with_truth, 189u) << "SOURCE.md: 189 also have ground truth";
+  const splat::RgbdFrame f = d.load(0);
+  std::size_t valid = 0;
+  for (float z : f.depth) valid += z > 0;
+  EXPECT_NEAR(static_cast<double>(valid) / static_cast<double>(f.depth.size()), 0.74, 0.02) << "SOURCE.md: 74% valid depth";
+}
+
+TEST(TumDataset, UnknownCameraAndBadFoldersAreErrors) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "mystery");
+  gslam::test::write_text(dir / "mystery" / "rgb.txt", "1.0 rgb/1.png\n");
+  gslam::test::write_text(dir / "mystery" / "depth.txt", "1.0 depth/1.png\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery"), "unknown TUM camera", "--intrinsics");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "nothing"), "nothing", "does not exist");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir.path()), "not a dataset folder");
+  // With intrinsics given, the missing images leave no frame.
+  app::DatasetOptions options;
+  options.intrinsics = "500,500,320,240";
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery", options), "no frame has both colour and depth");
+}
+
+TEST(SyntheticSequence, WritesAReadableSequenceWithExactGroundTruth) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 3;
+  o.width = 64;
+  o.height = 48;
+  o.focal = 52;
+  app::write_synthetic_sequence(dir / "seq", o);
+  const app::Dataset d = app::open_dataset(dir / "seq");
+  ASSERT_EQ(d.entries.size(), 3u);
+  EXPECT_DOUBLE_EQ(d.intrinsics.fx, 52);
+  EXPECT_TRUE(d.has_ground_truth());
+  const splat::RgbdFrame f = d.load(1);
+  for (float z : f.depth) ASSERT_GT(z, 0.f) << "the room is closed: every pixel hits something";
+  float brightest = 0;
+  for (float c : f.rgb) brightest = std::max(brightest, c);
+  EXPECT_GT(brightest, 0.3f);
+}
+
+TEST(TrajectoryEvaluation, RigidlyMovedTrajectoryHasZeroAte) {
+  std::vector<app::StampedPose> truth, estimate;
+  const Eigen::Isometry3d offset = splat::se3_exp((splat::Vector6d() << 1, 2, 3, 0.3, -0.2, 0.5).finished());
+  for (int i = 0; i < 40; ++i) {
+    app::StampedPose p;
+    p.timestamp = i * 0.05;
+    p.T_world_cam = splat::se3_exp((splat::Vector6d() << 0.1 * i, std::sin(0.2 * i), 0.02 * i * i, 0.01 * i, 0.02, -0.01 * i).finished());
+    truth.push_back(p);
+    p.T_world_cam = offset * p.T_world_cam;
+    p.timestamp += 0.004;  // within the association window
+    estimate.push_back(p);
+  }
+  const app::TrajectoryErrors e = app::evaluate_trajectory(estimate, truth);
+  EXPECT_EQ(e.matched, 40u);
+  EXPECT_LT(e.ate_rmse, 1e-9);
+  EXPECT_LT(e.rpe_translation_rmse, 1e-9);
+  EXPECT_GT(e.rpe_pairs, 0u);
+  // A 1 cm error on every position in x shows up as ~1 cm (less what alignment absorbs).
+  for (std::size_t i = 0; i < estimate.size(); i += 2) estimate[i].T_world_cam.translation().x() += 0.02;
+  EXPECT_NEAR(app::evaluate_trajectory(estimate, truth).ate_rmse, 0.01, 0.002);
+}
+
+}  // namespace

@@ -1,0 +1,50 @@
+// System tests: reconstruct sequences end to end and bound the trajectory error against
+// ground truth.
+#include <gtest/gtest.h>
+
+#include "app/dataset.h"
+#include "app/evaluation.h"
+#include "app/slam.h"
+#include "app/synthetic_sequence.h"
+#include "support/temp_dir.h"
+#include "support/test_data.h"
+
+namespace {
+
+app::TrajectoryErrors reconstruct(const app::Dataset& dataset, std::size_t& failures) {
+  auto rasterizer = splat::make_cpu_rasterizer();
+  app::SlamSystem slam(*rasterizer, app::SlamConfig{});
+  std::vector<app::StampedPose> estimate, truth;
+  failures = 0;
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
+    const app::FrameRecord r = slam.process(dataset.load(i));
+    failures += r.tracked ? 0 : 1;
+    estimate.push_back({r.timestamp, r.T_world_cam});
+    if (dataset.entries[i].T_world_cam_truth) truth.push_back({r.timestamp, *dataset.entries[i].T_world_cam_truth});
+  }
+  return app::evaluate_trajectory(estimate, truth);
+}
+
+TEST(SlamSystem, SyntheticRoomTrajectoryWithinOneCentimetre) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 30;
+  app::write_synthetic_sequence(dir / "seq", o);
+  std::size_t failures = 0;
+  const app::TrajectoryErrors e = reconstruct(app::open_dataset(dir / "seq"), failures);
+  std::printf("synthetic: ATE %.2f cm over %zu frames\n", e.ate_rmse * 100, e.matched);
+  EXPECT_EQ(failures, 0u);
+  EXPECT_LT(e.ate_rmse, 0.01);
+}
+
+TEST(SlamSystem, RealTeddySequencePrefixTrajectoryWithinTwoCentimetres) {
+  GSLAM_REQUIRE_SHARED_DATA(root, "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy");
+  app::DatasetOptions options;
+  options.max_frames = 40;
+  std::size_t failures = 0;
+  const app::TrajectoryErrors e = reconstruct(app::open_dataset(root, options), failures);
+  std::printf("teddy first 40: ATE %.2f cm over %zu frames, %zu failures\n", e.ate_rmse * 100, e.matched, failures);
+  EXPECT_LT(e.ate_rmse, 0.02);
+}
+
+}  // namespace
