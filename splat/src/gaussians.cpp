@@ -38,26 +38,10 @@ int param_group_width(ParamGroup group, int sh_degree) {
   return 0;
 }
 
-template <typename Scalar>
-std::vector<Scalar>& param_group(GaussiansT<Scalar>& g, ParamGroup group) {
-  switch (group) {
-    case ParamGroup::kMeans: return g.means;
-    case ParamGroup::kLogScales: return g.log_scales;
-    case ParamGroup::kRotations: return g.rotations;
-    case ParamGroup::kOpacityLogits: return g.opacity_logits;
-    case ParamGroup::kSh: return g.sh;
-  }
-  return g.means;
-}
-
-template <typename Scalar>
-const std::vector<Scalar>& param_group(const GaussiansT<Scalar>& g, ParamGroup group) {
-  return param_group(const_cast<GaussiansT<Scalar>&>(g), group);
-}
-
 namespace {
-template <typename Scalar>
-std::span<const Scalar> view_group(const GaussiansViewT<Scalar>& g, ParamGroup group) {
+// The field of a group, for maps and views alike (they share field names).
+template <typename Map>
+auto& group_field(Map& g, ParamGroup group) {
   switch (group) {
     case ParamGroup::kMeans: return g.means;
     case ParamGroup::kLogScales: return g.log_scales;
@@ -70,6 +54,17 @@ std::span<const Scalar> view_group(const GaussiansViewT<Scalar>& g, ParamGroup g
 }  // namespace
 
 template <typename Scalar>
+std::vector<Scalar>& param_group(GaussiansT<Scalar>& g, ParamGroup group) {
+  return group_field(g, group);
+}
+
+template <typename Scalar>
+const std::vector<Scalar>& param_group(const GaussiansT<Scalar>& g, ParamGroup group) {
+  return param_group(const_cast<GaussiansT<Scalar>&>(g), group);
+}
+
+
+template <typename Scalar>
 void validate_sizes(const GaussiansViewT<Scalar>& g, std::string_view where) {
   if (g.sh_degree < 0 || g.sh_degree > kMaxShDegree) {
     throw Error(std::string(where) + ": sh_degree is " + std::to_string(g.sh_degree) +
@@ -78,7 +73,7 @@ void validate_sizes(const GaussiansViewT<Scalar>& g, std::string_view where) {
   const std::size_t n = g.size();
   for (ParamGroup group : kAllParamGroups) {
     const std::size_t width = static_cast<std::size_t>(param_group_width(group, g.sh_degree));
-    const std::size_t got = view_group(g, group).size();
+    const std::size_t got = group_field(g, group).size();
     if (got != width * n) {
       throw Error(std::string(where) + ": " + param_group_name(group) + " has " +
                   std::to_string(got) + " values, expected " + std::to_string(width) + "*N = " +
@@ -92,7 +87,7 @@ template <typename Scalar>
 void validate(const GaussiansViewT<Scalar>& g, std::string_view where) {
   validate_sizes(g, where);
   for (ParamGroup group : kAllParamGroups) {
-    const auto values = view_group(g, group);
+    const auto values = group_field(g, group);
     const std::size_t width = static_cast<std::size_t>(param_group_width(group, g.sh_degree));
     for (std::size_t i = 0; i < values.size(); ++i) {
       if (!std::isfinite(values[i])) {

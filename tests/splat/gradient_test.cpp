@@ -43,18 +43,27 @@ struct GradientCase {
   bool background;
 };
 
-class RasterizerGradients : public ::testing::TestWithParam<GradientCase> {};
+class RasterizerGradients : public ::testing::TestWithParam<GradientCase> {
+ protected:
+  void SetUp() override {
+    const GradientCase param = GetParam();
+    SceneOptions options;
+    options.seed = param.seed;
+    options.sh_degree = param.sh_degree;
+    options.count = param.count;
+    scene_ = gslam::test::make_random_scene<double>(options);
+    if (param.background) settings_.background = {0.2f, 0.5f, 0.9f};
+  }
+  Scene<double> scene_;
+  splat::RenderSettings settings_;
+  splat::ThreadPool pool_{2};
+};
 
 TEST_P(RasterizerGradients, MatchFiniteDifferencesForEveryParameterAndPose) {
   const GradientCase param = GetParam();
-  SceneOptions options;
-  options.seed = param.seed;
-  options.sh_degree = param.sh_degree;
-  options.count = param.count;
-  Scene<double> scene = gslam::test::make_random_scene<double>(options);
-  splat::RenderSettings settings;
-  if (param.background) settings.background = {0.2f, 0.5f, 0.9f};
-  splat::ThreadPool pool(2);
+  Scene<double>& scene = scene_;
+  const splat::RenderSettings& settings = settings_;
+  splat::ThreadPool& pool = pool_;
   const LinearLoss loss_of(scene.camera.width, scene.camera.height, param.seed + 100);
 
   const auto forward = splat::reference_forward<double>(scene.gaussians, scene.camera, settings, pool);
@@ -86,14 +95,9 @@ TEST_P(RasterizerGradients, MatchFiniteDifferencesForEveryParameterAndPose) {
 // against the (separately checked) reverse-mode pose gradient of a weighted sum.
 TEST_P(RasterizerGradients, PoseJacobianMatchesFiniteDifferencesAndBackward) {
   const GradientCase param = GetParam();
-  SceneOptions options;
-  options.seed = param.seed;
-  options.sh_degree = param.sh_degree;
-  options.count = param.count;
-  Scene<double> scene = gslam::test::make_random_scene<double>(options);
-  splat::RenderSettings settings;
-  if (param.background) settings.background = {0.2f, 0.5f, 0.9f};
-  splat::ThreadPool pool(2);
+  Scene<double>& scene = scene_;
+  const splat::RenderSettings& settings = settings_;
+  splat::ThreadPool& pool = pool_;
   const auto forward = splat::reference_forward<double>(scene.gaussians, scene.camera, settings, pool);
   const std::vector<double> jac = splat::reference_pose_jacobian<double>(forward, pool);
   const std::size_t pixels = forward.alpha.size();

@@ -185,16 +185,26 @@ Mat2<T> invert_sym2_vjp(const Vec3<T>& conic, const Vec3<T>& v_conic) {
   return -(q * g * q);
 }
 
+// Normalization constants of the real SH basis, degrees 0..3.
+template <typename T>
+struct ShConstants {
+  static constexpr T c0 = T(0.28209479177387814);
+  static constexpr T c1 = T(0.4886025119029199);
+  static constexpr T c2[5] = {T(1.0925484305920792), T(-1.0925484305920792), T(0.31539156525252005),
+                              T(-1.0925484305920792), T(0.5462742152960396)};
+  static constexpr T c3[7] = {T(-0.5900435899266435), T(2.890611442640554), T(-0.4570457994644658),
+                              T(0.3731763325901154),  T(-0.4570457994644658), T(1.445305721320277),
+                              T(-0.5900435899266435)};
+};
+
 // Real spherical-harmonics basis (with the Condon-Shortley phase, INRIA/gsplat order) of a unit
 // direction, up to `degree`; writes (degree+1)^2 values.
 template <typename T>
 void sh_basis(int degree, const Vec3<T>& d, T* b) {
-  constexpr T kC0 = T(0.28209479177387814), kC1 = T(0.4886025119029199);
-  constexpr T kC2[] = {T(1.0925484305920792), T(-1.0925484305920792), T(0.31539156525252005),
-                       T(-1.0925484305920792), T(0.5462742152960396)};
-  constexpr T kC3[] = {T(-0.5900435899266435), T(2.890611442640554), T(-0.4570457994644658),
-                       T(0.3731763325901154),  T(-0.4570457994644658), T(1.445305721320277),
-                       T(-0.5900435899266435)};
+  using C = ShConstants<T>;
+  constexpr T kC0 = C::c0, kC1 = C::c1;
+  constexpr const T* kC2 = C::c2;
+  constexpr const T* kC3 = C::c3;
   const T x = d.x, y = d.y, z = d.z;
   b[0] = kC0;
   if (degree < 1) return;
@@ -221,12 +231,10 @@ void sh_basis(int degree, const Vec3<T>& d, T* b) {
 // dL/d(direction) of sum_k b_k(d) w_k, where w_k = sum_c sh_kc dL/dcolour_c (given as `w`).
 template <typename T>
 Vec3<T> sh_basis_vjp(int degree, const Vec3<T>& d, const T* w) {
-  constexpr T kC1 = T(0.4886025119029199);
-  constexpr T kC2[] = {T(1.0925484305920792), T(-1.0925484305920792), T(0.31539156525252005),
-                       T(-1.0925484305920792), T(0.5462742152960396)};
-  constexpr T kC3[] = {T(-0.5900435899266435), T(2.890611442640554), T(-0.4570457994644658),
-                       T(0.3731763325901154),  T(-0.4570457994644658), T(1.445305721320277),
-                       T(-0.5900435899266435)};
+  using C = ShConstants<T>;
+  constexpr T kC1 = C::c1;
+  constexpr const T* kC2 = C::c2;
+  constexpr const T* kC3 = C::c3;
   const T x = d.x, y = d.y, z = d.z;
   Vec3<T> g(0);
   if (degree < 1) return g;
