@@ -55,6 +55,26 @@ PixelRect splat_rect(const ForwardResultT<T>& f, uint32_t id, int tile_x0, int t
   return {lo(mx - rx), lo(my - ry), hi(mx + rx), hi(my + ry)};
 }
 
+// Whether any pixel centre px in [px_first, px_last] of the row at py can reach alpha >= kAlphaMin.
+// Along a row sigma is a parabola in dx = mx - px: 0.5 a (dx - dx0)^2 + 0.5 dy^2 (c - b^2/a)
+// with dx0 = -b dy / a, so the test is exact; `limit` is ln(opacity / kAlphaMin) widened by
+// kRowCullSlack, so rounding in the pixel loop can never make a skipped row count.
+inline constexpr double kRowCullSlack = 0.05;  // keeps rows down to 0.95 * kAlphaMin
+template <typename T>
+bool row_reaches(const Splat<T>& sp, T limit, T py, T px_first, T px_last) {
+  const T dy = sp.my - py;
+  const T sigma_min = T(0.5) * dy * dy * (sp.cc - sp.cb * sp.cb / sp.ca);
+  if (sigma_min > limit) return false;
+  const T centre = sp.mx + sp.cb * dy / sp.ca;  // px where sigma is smallest on this row
+  const T half = std::sqrt(2 * (limit - sigma_min) / sp.ca);
+  return centre + half >= px_first && centre - half <= px_last;
+}
+
+template <typename T>
+T row_cull_limit(const Splat<T>& sp) {
+  return std::log(sp.opacity / T(io::kAlphaMin)) + T(kRowCullSlack);
+}
+
 // Per-pixel evaluation shared by forward and backward: offset, Mahalanobis term and alpha.
 // The pixel loops below are written as single float selects (no &&, no bool lanes): GCC 12
 // otherwise gives up vectorizing them.
@@ -143,10 +163,12 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
       if (rect.empty()) continue;
       const Splat<T> sp = load_splat(f, id);
+      const T limit = row_cull_limit(sp);
       const int32_t next_last = static_cast<int32_t>(s + 1);
       for (int y = rect.y0; y < rect.y1; ++y) {
         if (row_live[y] == 0) continue;
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
+        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
         T* row_trans = trans + y * kTile;
         T* row_done = done + y * kTile;
         T* row_r = acc_r + y * kTile;
@@ -246,11 +268,13 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
       const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
       if (rect.empty()) continue;
       const Splat<T> sp = load_splat(f, id);
+      const T limit = row_cull_limit(sp);
       // Per-lane partial sums over the rows, reduced once per splat (in a fixed order).
       alignas(64) T lanes[kSlots][kTile] = {};
       for (int y = rect.y0; y < rect.y1; ++y) {
         if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
+        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
         const int row = y * kTile;
 #pragma omp simd
         for (int x = 0; x < kTile; ++x) {
