@@ -72,6 +72,7 @@ SlamConfig load_config(const std::filesystem::path& path) {
       get(m, "window", c.mapping.window);
       get(m, "resolution_factor", c.mapping.resolution_factor);
       get(m, "seed_stride", c.mapping.seed.stride);
+      get(m, "isotropic", c.mapping.isotropic);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());

@@ -79,7 +79,17 @@ double Mapper::optimize_step(const Keyframe& kf) {
     loss += splat::dssim_loss<float>(render.rgb, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
   loss += splat::depth_l1_loss<float>(render.depth, f.depth, {}, d.depth, config_.depth_weight);
-  adam_.step(map_, rasterizer_.backward(render, d).d_gaussians);
+  splat::GaussianGrads grads = rasterizer_.backward(render, d).d_gaussians;
+  if (config_.isotropic) {
+    // The three log scales move together (they start equal) and rotations stay fixed.
+    for (std::size_t i = 0; i < grads.size(); ++i) {
+      float* g = &grads.log_scales[i * 3];
+      const float mean = (g[0] + g[1] + g[2]) / 3;
+      g[0] = g[1] = g[2] = mean;
+    }
+    std::fill(grads.rotations.begin(), grads.rotations.end(), 0.f);
+  }
+  adam_.step(map_, grads);
   return loss;
 }
 
