@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
-  libeigen3-dev libglm-dev libpng-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
+  libeigen3-dev libglm-dev libpng-dev libjpeg-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev libgtest-dev libbenchmark-dev
 )
 missing=()

@@ -9,6 +9,7 @@
 #include "app/image_io.h"
 #include "app/trajectory.h"
 #include "splat/error.h"
+#include "splat/se3.h"
 
 namespace app {
 namespace {
@@ -55,7 +56,7 @@ void apply_intrinsics(splat::Camera& cam, const std::string& text) {
 
 // Image size from the first colour image.
 void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
-  const splat::Image8 image = read_png_rgb8(rgb);
+  const splat::Image8 image = read_rgb8(rgb);
   cam.width = image.width;
   cam.height = image.height;
 }
@@ -111,6 +112,55 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   return d;
 }
 
+// Replica as NICE-SLAM and SplaTAM ship it: results/frameNNNNNN.jpg, results/depthNNNNNN.png
+// (/ 6553.5), traj.txt with one row-major 4x4 camera-to-world matrix per frame. Frames are
+// stamped at 30 Hz from 0. Intrinsics: their Replica camera (1200x680, f = 600).
+Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& options) {
+  Dataset d;
+  d.format = "replica";
+  d.root = root;
+  d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 6553.5;
+  if (!options.intrinsics.empty()) {
+    apply_intrinsics(d.intrinsics, options.intrinsics);
+  } else {
+    d.intrinsics.fx = d.intrinsics.fy = 600.0;
+    d.intrinsics.cx = 599.5;
+    d.intrinsics.cy = 339.5;
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  std::ifstream traj(root / "traj.txt");
+  if (!traj) fail(root / "traj.txt", "cannot open file");
+  std::string line;
+  for (int line_no = 1; std::getline(traj, line); ++line_no) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream words(line);
+    Eigen::Matrix4d m;
+    for (int k = 0; k < 16; ++k) {
+      if (!(words >> m(k / 4, k % 4)) || !std::isfinite(m(k / 4, k % 4))) {
+        fail(root / "traj.txt", "line " + std::to_string(line_no) + ": expected 16 numbers (a row-major 4x4 matrix)");
+      }
+    }
+    Eigen::Isometry3d pose;
+    pose.matrix() = m;
+    poses.push_back(splat::orthonormalized(pose));
+  }
+  for (std::size_t i = 0;; ++i) {
+    char rgb[32], depth[32];
+    std::snprintf(rgb, sizeof(rgb), "frame%06zu.jpg", i);
+    std::snprintf(depth, sizeof(depth), "depth%06zu.png", i);
+    const auto rgb_path = root / "results" / rgb, depth_path = root / "results" / depth;
+    if (!std::filesystem::exists(rgb_path)) break;
+    if (!std::filesystem::exists(depth_path)) {
+      ++d.skipped_missing;
+      continue;
+    }
+    DatasetEntry e{static_cast<double>(i) / 30.0, rgb_path, depth_path, std::nullopt};
+    if (i < poses.size()) e.T_world_cam_truth = poses[i];
+    d.entries.push_back(e);
+  }
+  return d;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<double>& a,
@@ -151,7 +201,7 @@ bool Dataset::has_ground_truth() const {
 
 splat::RgbdFrame Dataset::load(std::size_t i) const {
   const DatasetEntry& e = entries.at(i);
-  const splat::Image8 rgb = read_png_rgb8(e.rgb);
+  const splat::Image8 rgb = read_rgb8(e.rgb);
   const splat::Image16 depth = read_png_gray16(e.depth);
   if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
     fail(e.rgb, "image is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) + ", expected " +
@@ -177,8 +227,10 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   Dataset d;
   if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
     d = open_tum(root, options);
+  } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {
+    d = open_replica(root, options);
   } else {
-    fail(root, "not a dataset folder: expected TUM (rgb.txt, depth.txt)");
+    fail(root, "not a dataset folder: expected TUM (rgb.txt, depth.txt) or Replica (results/, traj.txt)");
   }
   if (d.entries.empty()) fail(root, "no frame has both colour and depth");
   if (options.max_frames > 0 && d.entries.size() > static_cast<std::size_t>(options.max_frames)) {

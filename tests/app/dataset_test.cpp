@@ -1,7 +1,11 @@
+#include <cmath>
+#include <cstdio>
+
 #include <gtest/gtest.h>
 
 #include "app/dataset.h"
 #include "app/evaluation.h"
+#include "app/image_io.h"
 #include "app/synthetic_sequence.h"
 #include "splat/se3.h"
 #include "support/expect_error.h"
@@ -92,6 +96,54 @@ TEST(TrajectoryEvaluation, RigidlyMovedTrajectoryHasZeroAte) {
   // A 1 cm error on every position in x shows up as ~1 cm (less what alignment absorbs).
   for (std::size_t i = 0; i < estimate.size(); i += 2) estimate[i].T_world_cam.translation().x() += 0.02;
   EXPECT_NEAR(app::evaluate_trajectory(estimate, truth).ate_rmse, 0.01, 0.002);
+}
+
+}  // namespace
+
+namespace {
+
+// Writes the synthetic sequence again in Replica layout and reads it back.
+TEST(ReplicaDataset, ReadsJpegFramesScaledDepthAndMatrixTrajectory) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 3;
+  o.width = 64;
+  o.height = 48;
+  o.focal = 52;
+  app::write_synthetic_sequence(dir / "tum", o);
+  const app::Dataset tum = app::open_dataset(dir / "tum");
+  std::filesystem::create_directories(dir / "replica" / "results");
+  std::string traj;
+  for (std::size_t i = 0; i < tum.entries.size(); ++i) {
+    const splat::RgbdFrame f = tum.load(i);
+    splat::Image8 rgb(f.width(), f.height(), 3);
+    for (std::size_t k = 0; k < f.rgb.size(); ++k) rgb.data[k] = static_cast<uint8_t>(std::lround(f.rgb[k] * 255));
+    splat::Image16 depth(f.width(), f.height(), 1);
+    for (std::size_t k = 0; k < f.depth.size(); ++k) depth.data[k] = static_cast<uint16_t>(std::lround(f.depth[k] * 6553.5));
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame%06zu.jpg", i);
+    app::write_jpeg_rgb8(dir / "replica" / "results" / name, rgb);
+    std::snprintf(name, sizeof(name), "depth%06zu.png", i);
+    app::write_png_gray16(dir / "replica" / "results" / name, depth);
+    const Eigen::Matrix4d m = tum.entries[i].T_world_cam_truth->matrix();
+    for (int k = 0; k < 16; ++k) traj += std::to_string(m(k / 4, k % 4)) + (k < 15 ? " " : "\n");
+  }
+  gslam::test::write_text(dir / "replica" / "traj.txt", traj);
+  app::DatasetOptions options;
+  options.intrinsics = "52,52,32,24";  // not the Replica camera
+  const app::Dataset replica = app::open_dataset(dir / "replica", options);
+  EXPECT_EQ(replica.format, "replica");
+  ASSERT_EQ(replica.entries.size(), 3u);
+  EXPECT_NEAR(replica.entries[2].timestamp, 2.0 / 30.0, 1e-12);
+  EXPECT_TRUE(replica.entries[1].T_world_cam_truth->isApprox(*tum.entries[1].T_world_cam_truth, 1e-5));
+  const splat::RgbdFrame a = tum.load(1), b = replica.load(1);
+  double colour_error = 0;
+  for (std::size_t k = 0; k < a.rgb.size(); ++k) colour_error += std::abs(a.rgb[k] - b.rgb[k]);
+  EXPECT_LT(colour_error / static_cast<double>(a.rgb.size()), 0.03) << "JPEG at quality 95 is close";
+  for (std::size_t k = 0; k < a.depth.size(); ++k) ASSERT_NEAR(a.depth[k], b.depth[k], 2e-4) << "pixel " << k;
+
+  gslam::test::write_text(dir / "replica" / "traj.txt", "1 0 0 0 0 1 0 0\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "replica", options), "traj.txt", "line 1", "16 numbers");
 }
 
 }  // namespace

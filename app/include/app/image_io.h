@@ -23,6 +23,13 @@ void write_png_rgb8(const std::filesystem::path& path, const splat::Image8& imag
 // Reads an 8-bit PNG as RGB (grey and palette expanded, alpha dropped).
 splat::Image8 read_png_rgb8(const std::filesystem::path& path);
 
+// JPEG (libjpeg): read as 8-bit RGB; write 8-bit RGB at `quality` (1..100), atomically.
+splat::Image8 read_jpeg_rgb8(const std::filesystem::path& path);
+void write_jpeg_rgb8(const std::filesystem::path& path, const splat::Image8& image, int quality = 95);
+
+// PNG or JPEG by extension.
+splat::Image8 read_rgb8(const std::filesystem::path& path);
+
 // Reads a single-channel 16-bit PNG (depth maps) exactly as stored.
 splat::Image16 read_png_gray16(const std::filesystem::path& path);
 
