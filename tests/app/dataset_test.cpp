@@ -16,6 +16,16 @@ namespace {
 
 using gslam::test::TempDir;
 
+// A 3-frame, 64x48 synthetic sequence in TUM layout (f = 52).
+void write_small_sequence(const std::filesystem::path& dir) {
+  app::SyntheticOptions o;
+  o.frames = 3;
+  o.width = 64;
+  o.height = 48;
+  o.focal = 52;
+  app::write_synthetic_sequence(dir, o);
+}
+
 TEST(Association, PairsNearestWithinTwentyMillisecondsOnce) {
   const std::vector<double> rgb = {0.00, 0.033, 0.066, 0.100};
   const std::vector<double> depth = {0.005, 0.030, 0.031, 0.150};
@@ -59,12 +69,7 @@ TEST(TumDataset, UnknownCameraAndBadFoldersAreErrors) {
 
 TEST(SyntheticSequence, WritesAReadableSequenceWithExactGroundTruth) {
   TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 3;
-  o.width = 64;
-  o.height = 48;
-  o.focal = 52;
-  app::write_synthetic_sequence(dir / "seq", o);
+  write_small_sequence(dir / "seq");
   const app::Dataset d = app::open_dataset(dir / "seq");
   ASSERT_EQ(d.entries.size(), 3u);
   EXPECT_DOUBLE_EQ(d.intrinsics.fx, 52);
@@ -105,12 +110,7 @@ namespace {
 // Writes the synthetic sequence again in Replica layout and reads it back.
 TEST(ReplicaDataset, ReadsJpegFramesScaledDepthAndMatrixTrajectory) {
   TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 3;
-  o.width = 64;
-  o.height = 48;
-  o.focal = 52;
-  app::write_synthetic_sequence(dir / "tum", o);
+  write_small_sequence(dir / "tum");
   const app::Dataset tum = app::open_dataset(dir / "tum");
   std::filesystem::create_directories(dir / "replica" / "results");
   std::string traj;
