@@ -365,42 +365,78 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
                    T(f.settings.background[2])};
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
-    const uint32_t begin = f.tile_ranges[tile * 2];
+    // Front to back, as the forward pass: out = sum_j c_j a_j T_j, T_j = prod_{k<j} (1 - a_k),
+    // so d out = sum_j T_j (dc_j a_j + c_j da_j + c_j a_j dlogT_j), dlogT_j = -sum da_k/(1-a_k).
+    // Per pixel and direction k: transmittance, dlogT and the tangents of r, g, b, depth.
+    alignas(64) T trans[kTilePixels], d_log_t[6][kTilePixels], d_rgb[3][6][kTilePixels],
+        d_z[6][kTilePixels];
+    alignas(64) int32_t last[kTilePixels];
+    int64_t row_max_last[kTile] = {};
+    for (int p = 0; p < kTilePixels; ++p) {
+      trans[p] = 1;
+      for (int k = 0; k < 6; ++k) {
+        d_log_t[k][p] = d_z[k][p] = 0;
+        for (int c = 0; c < 3; ++c) d_rgb[c][k][p] = 0;
+      }
+      const int x = p % kTile, y = p / kTile;
+      last[p] = 0;
+      if (x >= geo.width || y >= geo.height) continue;
+      last[p] = static_cast<int32_t>(f.last_contributor[static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x)]);
+      row_max_last[y] = std::max<int64_t>(row_max_last[y], last[p]);
+    }
+    int64_t max_last = 0;
+    for (int y = 0; y < kTile; ++y) max_last = std::max(max_last, row_max_last[y]);
+    for (int64_t s = f.tile_ranges[tile * 2]; s < max_last; ++s) {
+      const uint32_t id = f.sorted_ids[s];
+      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
+      if (rect.empty()) continue;
+      const Splat<T> sp = load_splat(f, id);
+      const T limit = row_cull_limit(sp);
+      const T* jac = &screen_jvp[static_cast<std::size_t>(id) * kScreenValues * 6];
+      for (int y = rect.y0; y < rect.y1; ++y) {
+        if (s >= row_max_last[y]) continue;
+        const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
+        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
+        const int row = y * kTile;
+#pragma omp simd
+        for (int x = 0; x < kTile; ++x) {
+          const int p = row + x;
+          const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
+          // 1 where the forward pass blended this splat into the pixel, else 0.
+          const T alpha_here = s < last[p] ? e.alpha : T(0);
+          const T live = alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+          const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
+          const T weight = live * e.alpha * trans[p];
+          const T inv = live / (1 - e.alpha);
+          // dsigma/d(mean x, mean y, conic a, b, c) at this pixel.
+          const T ds[5] = {sp.ca * e.dx + sp.cb * e.dy, sp.cc * e.dy + sp.cb * e.dx, T(0.5) * e.dx * e.dx,
+                           e.dx * e.dy, T(0.5) * e.dy * e.dy};
+#pragma GCC unroll 6
+          for (int k = 0; k < 6; ++k) {  // unrolled: a loop here would stop the pixel loop vectorizing
+            const T d_sigma = ds[0] * jac[0 * 6 + k] + ds[1] * jac[1 * 6 + k] + ds[2] * jac[2 * 6 + k] +
+                              ds[3] * jac[3 * 6 + k] + ds[4] * jac[4 * 6 + k];
+            const T d_alpha = -smooth * e.raw_alpha * d_sigma;
+            const T d_weight = live * trans[p] * (d_alpha + e.alpha * d_log_t[k][p]);
+            d_rgb[0][k][p] += d_weight * sp.r + weight * jac[6 * 6 + k];
+            d_rgb[1][k][p] += d_weight * sp.g + weight * jac[7 * 6 + k];
+            d_rgb[2][k][p] += d_weight * sp.b + weight * jac[8 * 6 + k];
+            d_z[k][p] += d_weight * sp.z + weight * jac[5 * 6 + k];
+            d_log_t[k][p] -= d_alpha * inv;
+          }
+          trans[p] *= 1 - live * e.alpha;
+        }
+      }
+    }
     for (int y = 0; y < geo.height; ++y) {
       for (int x = 0; x < geo.width; ++x) {
+        const int p = y * kTile + x;
         const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
-        const T px = T(geo.x0 + x) + T(0.5), py = T(geo.y0 + y) + T(0.5);
-        // Front to back: out = sum_j c_j a_j T_j with T_j = prod_{k<j} (1 - a_k), so
-        // d out = sum_j T_j (dc_j a_j + c_j da_j + c_j a_j dlogT_j), dlogT_j = -sum da_k/(1-a_k).
-        T trans = 1, d_log_t[6] = {}, d_rgb[3][6] = {}, d_z[6] = {};
-        for (uint32_t s = begin; s < f.last_contributor[o]; ++s) {
-          const uint32_t id = f.sorted_ids[s];
-          const Splat<T> sp = load_splat(f, id);
-          const PixelEval<T> e = eval_pixel(sp, px, py);
-          if (!(e.alpha >= T(io::kAlphaMin))) continue;  // not blended in the forward pass
-          const T* jac = &screen_jvp[static_cast<std::size_t>(id) * kScreenValues * 6];
-          const T weight = e.alpha * trans;
-          const T smooth = e.raw_alpha < T(io::kAlphaMax) ? T(1) : T(0);
-          const T color[3] = {sp.r, sp.g, sp.b};
-          for (int k = 0; k < 6; ++k) {
-            const T d_sigma = (sp.ca * e.dx + sp.cb * e.dy) * jac[0 * 6 + k] +
-                              (sp.cc * e.dy + sp.cb * e.dx) * jac[1 * 6 + k] +
-                              T(0.5) * e.dx * e.dx * jac[2 * 6 + k] + e.dx * e.dy * jac[3 * 6 + k] +
-                              T(0.5) * e.dy * e.dy * jac[4 * 6 + k];
-            const T d_alpha = -smooth * e.raw_alpha * d_sigma;
-            const T d_weight = trans * (d_alpha + e.alpha * d_log_t[k]);
-            for (int c = 0; c < 3; ++c) d_rgb[c][k] += d_weight * color[c] + weight * jac[(6 + c) * 6 + k];
-            d_z[k] += d_weight * sp.z + weight * jac[5 * 6 + k];
-            d_log_t[k] -= d_alpha / (1 - e.alpha);
-          }
-          trans *= 1 - e.alpha;
-        }
-        T* row = &out[o * kOut * 6];
+        T* values = &out[o * kOut * 6];
         for (int k = 0; k < 6; ++k) {
-          const T d_final = trans * d_log_t[k];  // d T_final
-          for (int c = 0; c < 3; ++c) row[c * 6 + k] = d_rgb[c][k] + bg[c] * d_final;
-          row[3 * 6 + k] = d_z[k];
-          row[4 * 6 + k] = -d_final;
+          const T d_final = trans[p] * d_log_t[k][p];  // d T_final
+          for (int c = 0; c < 3; ++c) values[c * 6 + k] = d_rgb[c][k][p] + bg[c] * d_final;
+          values[3 * 6 + k] = d_z[k][p];
+          values[4 * 6 + k] = -d_final;
         }
       }
     }
