@@ -16,7 +16,7 @@ SlamConfig::SlamConfig() {
   tracking.pyramid = {2};
   tracking.iterations = {10};
   mapping.resolution_factor = 2;
-  mapping.iterations = 30;
+  mapping.iterations = 45;  // teddy, first 100 frames: 30 -> 45 took ATE 1.31 -> 1.11 cm, 1.44 -> 1.21 fps
   mapping.seed.scale_factor = 0.6;
 }
 
