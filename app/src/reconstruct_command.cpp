@@ -155,10 +155,12 @@ int run_reconstruct(const ReconstructOptions& o) {
     records.push_back(record);
     trajectory.push_back({record.timestamp, record.T_world_cam});
     progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes_added()) + " keyframes");
-    if ((i + 1) % static_cast<std::size_t>(std::max(1, o.checkpoint_every)) == 0) {
+    const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
+    if ((i + 1) % every == 0) {
       write_tum_trajectory(o.out / "trajectory.txt", trajectory);
       summary(false);
     }
+    if ((i + 1) % (5 * every) == 0) save_map(o.out / "map.ply", slam.map());
   }
   progress.finish();
   write_tum_trajectory(o.out / "trajectory.txt", trajectory);

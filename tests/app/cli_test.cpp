@@ -105,3 +105,27 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
+
+namespace {
+
+TEST(CliReconstruct, SyntheticDefaultWritesEveryOutputAndEvalReadsThem) {
+  TempDir dir;
+  const RunResult r = run_gslam("reconstruct --out " + (dir / "run").string() + " --max-frames 12");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name : {"trajectory.txt", "map.ply", "map.glb", "summary.json", "keyframes/kf_0000.png",
+                           "keyframes/kf_0000.exr"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
+  }
+  EXPECT_NE(r.output.find("reconstruct 12/12"), std::string::npos) << "progress should be shown";
+  const RunResult e = run_gslam("eval " + (dir / "run").string() + " --dataset " + (dir / "run" / "synthetic_input").string());
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  EXPECT_NE(e.output.find("ATE RMSE"), std::string::npos) << e.output;
+  for (const char* name : {"eval.json", "trajectory_top.png", "ate_over_time.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
+  }
+  const RunResult missing = run_gslam("reconstruct " + (dir / "nowhere").string() + " --out " + (dir / "x").string());
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("dataset folder does not exist"), std::string::npos) << missing.output;
+}
+
+}  // namespace

@@ -13,7 +13,8 @@ struct ReconstructOptions {
   std::filesystem::path config;   // optional JSON with SLAM settings (README)
   DatasetOptions dataset_options;
   BackendChoice backend;
-  int checkpoint_every = 10;      // frames between atomic trajectory/summary checkpoints
+  int checkpoint_every = 10;      // frames between atomic trajectory/summary checkpoints;
+                                  // map.ply is checkpointed every 5x that
 };
 
 // `gslam reconstruct`: runs SLAM over a sequence and writes DIR/trajectory.txt (TUM, one line
