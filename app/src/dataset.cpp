@@ -8,15 +8,12 @@
 
 #include "app/image_io.h"
 #include "app/trajectory.h"
+#include "app/file_error.h"
 #include "splat/error.h"
 #include "splat/se3.h"
 
 namespace app {
 namespace {
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw splat::Error(path.string() + ": " + what);
-}
 
 struct ListEntry {
   double timestamp;

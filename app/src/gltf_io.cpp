@@ -9,6 +9,7 @@
 #include <tiny_gltf.h>
 
 #include "app/atomic_file.h"
+#include "app/file_error.h"
 #include "splat/error.h"
 
 namespace app {
@@ -17,10 +18,6 @@ namespace {
 constexpr const char* kExtension = "KHR_gaussian_splatting";
 constexpr const char* kPrefix = "KHR_gaussian_splatting:";
 constexpr double kShC0 = 0.28209479177387814;
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw splat::Error(path.string() + ": " + what);
-}
 
 double decode_component(const unsigned char* p, int component_type, bool normalized) {
   auto as = [&](auto v) {

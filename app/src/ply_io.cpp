@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "app/atomic_file.h"
+#include "app/file_error.h"
 #include "splat/error.h"
 
 namespace app {
@@ -48,10 +49,6 @@ int type_size(const std::string& type) {
 
 bool is_float_type(const std::string& t) {
   return t == "float" || t == "float32" || t == "double" || t == "float64";
-}
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw splat::Error(path.string() + ": " + what);
 }
 
 struct Header {

@@ -8,14 +8,11 @@
 
 #include "app/atomic_file.h"
 #include "app/image_io.h"
+#include "app/file_error.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw splat::Error(path.string() + ": " + what);
-}
 
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }

@@ -115,6 +115,14 @@ inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
   return e;
 }
 
+// 1 where the forward pass blended sorted splat s into a pixel whose contributors end at
+// `last`, else 0 (a float select, so the pixel loops stay vectorized).
+template <typename T>
+inline T blended(int64_t s, int32_t last, const PixelEval<T>& e) {
+  const T alpha_here = s < last ? e.alpha : T(0);
+  return alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+}
+
 struct TileGeometry {
   int x0, y0;          // first pixel of the tile
   int width, height;   // pixels of the tile inside the image
@@ -280,9 +288,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          // 1 where the forward pass blended this splat into the pixel, else 0.
-          const T alpha_here = s < last[p] ? e.alpha : T(0);
-          const T live = alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+          const T live = blended(s, last[p], e);
           const T inv = live / (1 - e.alpha);
           const T t = live > 0 ? trans[p] * inv : trans[p];  // transmittance in front of it
           const T weight = live * e.alpha * t;
@@ -402,9 +408,7 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          // 1 where the forward pass blended this splat into the pixel, else 0.
-          const T alpha_here = s < last[p] ? e.alpha : T(0);
-          const T live = alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+          const T live = blended(s, last[p], e);
           const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
           const T weight = live * e.alpha * trans[p];
           const T inv = live / (1 - e.alpha);
