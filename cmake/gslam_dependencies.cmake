@@ -20,3 +20,17 @@ endif()
 if(GSLAM_BUILD_BENCHMARKS)
   gslam_require_package(benchmark libbenchmark-dev)
 endif()
+
+# Vulkan backend: the loader headers (libvulkan-dev) and glslang (glslang-tools). Without
+# them the build goes on CPU-only, with a warning.
+set(GSLAM_HAVE_VULKAN OFF)
+if(GSLAM_ENABLE_VULKAN)
+  find_package(Vulkan QUIET)
+  find_program(GSLAM_GLSLANG glslangValidator)
+  if(Vulkan_FOUND AND GSLAM_GLSLANG)
+    set(GSLAM_HAVE_VULKAN ON)
+  else()
+    message(WARNING "Vulkan backend disabled: apt-get install libvulkan-dev glslang-tools "
+                    "mesa-vulkan-drivers to build it")
+  endif()
+endif()

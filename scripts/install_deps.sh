@@ -5,6 +5,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libglm-dev libpng-dev libjpeg-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev libgtest-dev libbenchmark-dev
+  libvulkan-dev glslang-tools mesa-vulkan-drivers
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -28,6 +28,63 @@ GSLAM_CONST float kExtentSigmaMax = 3.33f;
 // fraction of tan(fov/2) on each side, so splats far off screen do not get huge footprints.
 GSLAM_CONST float kFovClampMargin = 0.3f;
 
+// Gradient slots per (tile, splat) intersection in the backward pass, in this order.
+GSLAM_CONST uint kSlotMeanX = 0u;
+GSLAM_CONST uint kSlotMeanY = 1u;
+GSLAM_CONST uint kSlotConicA = 2u;
+GSLAM_CONST uint kSlotConicB = 3u;
+GSLAM_CONST uint kSlotConicC = 4u;
+GSLAM_CONST uint kSlotOpacity = 5u;
+GSLAM_CONST uint kSlotRed = 6u;
+GSLAM_CONST uint kSlotGreen = 7u;
+GSLAM_CONST uint kSlotBlue = 8u;
+GSLAM_CONST uint kSlotDepth = 9u;
+GSLAM_CONST uint kGradSlots = 10u;
+// Forward-mode pose derivatives per Gaussian: mean x, y, conic a, b, c, depth, colour r, g, b,
+// each for the 6 pose directions: [N, kScreenValues, 6].
+GSLAM_CONST uint kScreenValues = 9u;
+// Per-pixel pose Jacobian outputs: r, g, b, depth, alpha.
+GSLAM_CONST uint kPoseJacobianOutputs = 5u;
+// Pose-gradient partial sums per workgroup: dL/dW (3x3, row-major) then dL/dt (3).
+GSLAM_CONST uint kPosePartials = 12u;
+
+// Vulkan compute: invocations per workgroup of the 1D stages, and keys per radix-sort block.
+GSLAM_CONST uint kGroupSize = 256u;
+// Radix sort: bits per pass and bins; one key per invocation, kGroupSize keys per block.
+GSLAM_CONST uint kRadixBits = 4u;
+GSLAM_CONST uint kRadixBins = 16u;
+// Prefix sum: elements per workgroup (4 per invocation).
+GSLAM_CONST uint kScanBlock = 1024u;
+// Splats staged in shared memory per round of the backward and pose-Jacobian compositing.
+GSLAM_CONST uint kBackwardBatch = 16u;
+// Backward reduction: most subgroups per 256-invocation workgroup (subgroup size >= 8).
+GSLAM_CONST uint kMaxSubgroups = 32u;
+
+// Cull reasons written by the projection stage (RenderStats counts them).
+GSLAM_CONST uint kCullNone = 0u;
+GSLAM_CONST uint kCullDepth = 1u;
+GSLAM_CONST uint kCullDegenerate = 2u;
+GSLAM_CONST uint kCullFaint = 3u;
+GSLAM_CONST uint kCullOffscreen = 4u;
+
+// Per-frame parameters every Vulkan stage reads (one storage buffer, std430: scalars and
+// scalar arrays only, so the C++ and GLSL layouts agree byte for byte).
+struct FrameParams {
+  float fx, fy, cx, cy;
+  float near_z, far_z;
+  float rotation[9];     // W of p_cam = W p_world + t, row-major
+  float translation[3];  // t
+  float cam_position[3]; // camera centre in the world, -W^T t
+  float background[3];
+  // Bounds on x/z and y/z for the projection Jacobian (see kFovClampMargin).
+  float lim_x_neg, lim_x_pos, lim_y_neg, lim_y_pos;
+  uint width, height, tiles_x, tiles_y;
+  uint count;            // Gaussians
+  int sh_degree;         // degree evaluated
+  uint sh_stride;        // SH coefficients per Gaussian in the map, (map degree + 1)^2
+  uint sh_direction_gradient;  // 1: backpropagate through the SH view direction
+};
+
 #ifdef __cplusplus
 }  // namespace splat::io
 #endif

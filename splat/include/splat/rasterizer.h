@@ -64,6 +64,10 @@ struct ForwardResultT {
   GaussiansViewT<Scalar> gaussians;
   Camera camera;
   RenderSettings settings;
+
+  // Opaque state of the backend that rendered it (the Vulkan backend keeps the frame's device
+  // buffers here so backward and pose_jacobian need no re-upload); null for the CPU backend.
+  std::shared_ptr<void> backend_state;
 };
 using ForwardResult = ForwardResultT<float>;
 
@@ -104,7 +108,18 @@ class Rasterizer {
   // Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the camera pose (the left
   // perturbation above), [H, W, 5, 6]: what Gauss-Newton pose tracking needs.
   virtual std::vector<float> pose_jacobian(const ForwardResult& forward) = 0;
+  // Device memory the backend holds now, in bytes (0 for the CPU backend).
+  virtual std::size_t device_memory_bytes() const { return 0; }
 };
+
+// Throws splat::Error unless every non-empty image gradient has the forward result's size.
+template <typename Scalar>
+void validate_image_grads(const ForwardResultT<Scalar>& forward, const ImageGradsT<Scalar>& d_image);
+
+// dL/d(pose) for the left perturbation from dL/dW and dL/dt of p_cam = W p_world + t, where
+// W, t are T_cam_world as the backend used it (in its precision). Shared by both backends.
+PoseGradient pose_gradient_from(const Eigen::Matrix3d& d_w, const Eigen::Vector3d& d_t,
+                                const Eigen::Matrix3d& w, const Eigen::Vector3d& t);
 
 struct CpuOptions {
   int threads = 0;  // 0 = all hardware threads

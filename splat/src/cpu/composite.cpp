@@ -11,8 +11,9 @@
 namespace splat::cpu {
 namespace {
 
-// Gradient slots per intersection in the backward pass.
+// Gradient slots per intersection in the backward pass (the order of shader_io.h).
 enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
+static_assert(kSlots == io::kGradSlots && kOpacity == io::kSlotOpacity && kZ == io::kSlotDepth);
 
 constexpr int kTile = static_cast<int>(io::kTileSize);
 constexpr int kTilePixels = kTile * kTile;

@@ -249,14 +249,15 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
     v_w += chunk_v_w[c];
     v_t += chunk_v_t[c];
   }
-  // Left perturbation T <- exp([v, w]) T: dW = [w]x W, dt = v + [w]x t. With A = dL/dW W^T +
-  // dL/dt t^T, dL/dw = (A32 - A23, A13 - A31, A21 - A12) and dL/dv = dL/dt.
-  const Mat3<double> w(cam.rotation);
-  const Vec3<double> t(cam.translation);
-  const Mat3<double> a = v_w * glm::transpose(w) + glm::outerProduct(v_t, t);
-  auto at = [&](int row, int col) { return a[col][row]; };
-  out.d_loss_d_pose << v_t.x, v_t.y, v_t.z, at(2, 1) - at(1, 2), at(0, 2) - at(2, 0),
-      at(1, 0) - at(0, 1);
+  Eigen::Matrix3d d_w, w;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      d_w(row, col) = v_w[col][row];
+      w(row, col) = double(cam.rotation[col][row]);
+    }
+  }
+  const Eigen::Vector3d t(double(cam.translation.x), double(cam.translation.y), double(cam.translation.z));
+  out.d_loss_d_pose = pose_gradient_from(d_w, Eigen::Vector3d(v_t.x, v_t.y, v_t.z), w, t);
 }
 
 template void project_forward(ForwardResultT<float>&, ThreadPool&);

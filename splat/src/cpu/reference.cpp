@@ -26,18 +26,7 @@ template <typename Scalar>
 BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward,
                                            const ImageGradsT<Scalar>& d_image, ThreadPool& pool,
                                            BackwardScratch<Scalar>* scratch) {
-  const std::size_t pixels = static_cast<std::size_t>(forward.width) * forward.height;
-  auto check = [&](const std::vector<Scalar>& v, std::size_t channels, const char* name) {
-    if (!v.empty() && v.size() != pixels * channels) {
-      throw Error(std::string("rasterize backward: d_") + name + " has " +
-                  std::to_string(v.size()) + " values, expected " +
-                  std::to_string(pixels * channels) + " for " + std::to_string(forward.width) +
-                  "x" + std::to_string(forward.height) + "x" + std::to_string(channels));
-    }
-  };
-  check(d_image.rgb, 3, "rgb");
-  check(d_image.alpha, 1, "alpha");
-  check(d_image.depth, 1, "depth");
+  validate_image_grads(forward, d_image);
   BackwardResultT<Scalar> out;
   BackwardScratch<Scalar> local;
   BackwardScratch<Scalar>& memory = scratch ? *scratch : local;

@@ -5,6 +5,7 @@
 
 #include "splat/rasterizer.h"
 #include "splat/thread_pool.h"
+#include "shader_io.h"
 
 namespace splat::cpu {
 
@@ -48,7 +49,7 @@ namespace splat::cpu {
 // Forward-mode derivatives of the screen quantities with respect to the pose (left perturbation
 // of T_cam_world), per Gaussian: [N, kScreenValues, 6] in the order mean x, mean y, conic a,
 // b, c, depth, colour r, g, b. Zero for culled Gaussians.
-inline constexpr int kScreenValues = 9;
+inline constexpr int kScreenValues = static_cast<int>(io::kScreenValues);
 template <typename T>
 std::vector<T> project_pose_jvp(const ForwardResultT<T>& frame, ThreadPool& pool);
 

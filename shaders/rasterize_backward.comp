@@ -1,0 +1,107 @@
+#version 450
+// Compositing backward: one workgroup per 16x16 tile, one invocation per pixel, walking the
+// tile's splats back to front from the last one any pixel used (kBackwardBatch at a time in
+// shared memory). Each splat's gradients are summed over the tile's pixels (subgroupAdd, then
+// the subgroup partials in a fixed order) and written to its intersection's kGradSlots slots:
+// every intersection belongs to one tile, so no atomics are needed and the result is
+// deterministic on a given device. Reads bindings 0..12; writes 13 (zeroed by the host first,
+// so intersections behind every pixel's last contributor keep zero).
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#include "composite.glsl"
+
+layout(local_size_x = 16, local_size_y = 16) in;
+layout(std430, binding = 8) readonly buffer LastContributor { uint last_contributor[]; };  // [H, W]
+layout(std430, binding = 9) readonly buffer FinalTrans { float final_transmittance[]; };  // [H, W]
+layout(std430, binding = 10) readonly buffer DRgb { float d_rgb[]; };      // [H, W, 3]
+layout(std430, binding = 11) readonly buffer DAlpha { float d_alpha[]; };  // [H, W]
+layout(std430, binding = 12) readonly buffer DDepth { float d_depth[]; };  // [H, W]
+layout(std430, binding = 13) writeonly buffer IsectGrads { float isect_grads[]; };  // [M, kGradSlots]
+// Which upstream gradients exist (an absent one is zero and its buffer is a placeholder).
+layout(push_constant) uniform Push { uint has_rgb; uint has_alpha; uint has_depth; } push;
+
+shared Splat batch[kBackwardBatch];
+shared float partials[kBackwardBatch][kGradSlots][kMaxSubgroups];
+shared uint tile_last;
+
+void main() {
+  uint tid = gl_LocalInvocationIndex;
+  uvec2 pixel = pixel_coord();
+  bool inside = pixel_inside(pixel);
+  vec2 centre = vec2(pixel) + 0.5;
+  uint tile = tile_index();
+  uint begin = tile_ranges[2 * tile];
+  uint o = pixel.y * frame.width + pixel.x;
+  // Per pixel: transmittance walking back to front, colour/depth behind the current splat,
+  // upstream gradients and the background/alpha term T_final (dA - bg.dC).
+  float t = 1.0;
+  vec3 behind = vec3(0);
+  float behind_z = 0;
+  vec3 v_rgb = vec3(0);
+  float v_z = 0, v_final = 0;
+  uint last = 0u;
+  if (inside) {
+    t = final_transmittance[o];
+    if (push.has_rgb != 0u) v_rgb = vec3(d_rgb[3 * o], d_rgb[3 * o + 1], d_rgb[3 * o + 2]);
+    if (push.has_depth != 0u) v_z = d_depth[o];
+    float v_a = push.has_alpha != 0u ? d_alpha[o] : 0.0;
+    vec3 bg = vec3(frame.background[0], frame.background[1], frame.background[2]);
+    v_final = t * (v_a - dot(bg, v_rgb));
+    last = last_contributor[o];
+  }
+  if (tid == 0u) tile_last = 0u;
+  barrier();
+  atomicMax(tile_last, last);
+  barrier();
+  uint stop = max(tile_last, begin);
+  for (uint hi = stop; hi > begin;) {
+    uint lo = hi - min(kBackwardBatch, hi - begin);
+    uint count = hi - lo;
+    if (tid < count) batch[tid] = load_splat(sorted_ids[lo + tid]);
+    barrier();
+    for (int k = int(count) - 1; k >= 0; --k) {
+      uint s = lo + uint(k);
+      Splat sp = batch[k];
+      PixelEval e = eval_pixel(sp, centre);
+      float live = (s < last && e.alpha >= kAlphaMin) ? 1.0 : 0.0;
+      float inv = live / (1.0 - e.alpha);
+      float t_front = live > 0 ? t * inv : t;  // transmittance in front of this splat
+      float weight = live * e.alpha * t_front;
+      // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
+      float v_alpha = dot(sp.color * t_front - behind * inv, v_rgb) +
+                      (sp.depth * t_front - behind_z * inv) * v_z + v_final * inv;
+      behind += weight * sp.color;
+      behind_z += weight * sp.depth;
+      t = t_front;
+      // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
+      float smooth_alpha = e.raw_alpha < kAlphaMax ? live : 0.0;
+      float v_sigma = -smooth_alpha * sp.opacity * e.gauss * v_alpha;
+      float g[kGradSlots];
+      g[kSlotMeanX] = (sp.conic.x * e.dx + sp.conic.y * e.dy) * v_sigma;
+      g[kSlotMeanY] = (sp.conic.z * e.dy + sp.conic.y * e.dx) * v_sigma;
+      g[kSlotConicA] = 0.5 * e.dx * e.dx * v_sigma;
+      g[kSlotConicB] = e.dx * e.dy * v_sigma;
+      g[kSlotConicC] = 0.5 * e.dy * e.dy * v_sigma;
+      g[kSlotOpacity] = smooth_alpha * e.gauss * v_alpha;
+      g[kSlotRed] = weight * v_rgb.r;
+      g[kSlotGreen] = weight * v_rgb.g;
+      g[kSlotBlue] = weight * v_rgb.b;
+      g[kSlotDepth] = weight * v_z;
+      for (uint slot = 0u; slot < kGradSlots; ++slot) {
+        float sum = subgroupAdd(g[slot]);
+        if (subgroupElect()) partials[k][slot][gl_SubgroupID] = sum;
+      }
+    }
+    barrier();
+    // Sum the subgroup partials of every (splat, slot) in subgroup order.
+    for (uint item = tid; item < count * kGradSlots; item += kGroupSize) {
+      uint k = item / kGradSlots, slot = item % kGradSlots;
+      float sum = 0;
+      for (uint sg = 0u; sg < gl_NumSubgroups; ++sg) sum += partials[k][slot][sg];
+      isect_grads[(lo + k) * kGradSlots + slot] = sum;
+    }
+    barrier();
+    hi = lo;
+  }
+}

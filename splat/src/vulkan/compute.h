@@ -1,0 +1,77 @@
+// Compute pipelines and the command batches that run them. Every stage binds only storage
+// buffers (bindings 0..n-1, in the order its .comp declares them) and up to 16 bytes of push
+// constants; a batch records dispatches with a full barrier between them, then runs them.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <initializer_list>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "vulkan/buffer.h"
+
+namespace splat::vk {
+
+class Kernel {
+ public:
+  Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindings, const char* name);
+  ~Kernel();
+  Kernel(const Kernel&) = delete;
+  Kernel& operator=(const Kernel&) = delete;
+
+  VkPipeline pipeline() const { return pipeline_; }
+  VkPipelineLayout layout() const { return layout_; }
+  VkDescriptorSetLayout set_layout() const { return set_layout_; }
+  uint32_t bindings() const { return bindings_; }
+  const char* name() const { return name_; }
+
+  static constexpr uint32_t kPushBytes = 16;
+
+ private:
+  Context& context_;
+  VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
+  VkPipelineLayout layout_ = VK_NULL_HANDLE;
+  VkPipeline pipeline_ = VK_NULL_HANDLE;
+  uint32_t bindings_;
+  const char* name_;
+};
+
+// Records work into one command buffer; run() submits it, waits, then performs the host side
+// of the recorded downloads. Reusable after run().
+class CommandBatch {
+ public:
+  explicit CommandBatch(Context& context);
+  ~CommandBatch();
+  CommandBatch(const CommandBatch&) = delete;
+  CommandBatch& operator=(const CommandBatch&) = delete;
+
+  // Binds `buffers` to bindings 0.. of the kernel (their count must match) and dispatches
+  // groups_x x groups_y workgroups; nothing is recorded for zero groups.
+  void dispatch(const Kernel& kernel, std::initializer_list<const Buffer*> buffers,
+                std::initializer_list<uint32_t> push, uint32_t groups_x, uint32_t groups_y = 1);
+  void fill_zero(Buffer& buffer, std::size_t bytes);
+  void copy(const Buffer& from, Buffer& to, std::size_t bytes);
+  // Host data to the buffer, now when it is mapped (the GPU is idle between batches),
+  // else through a staging copy recorded here.
+  void upload(Buffer& buffer, const void* data, std::size_t bytes);
+  // Buffer to host memory after run(); `data` must stay valid until then.
+  void download(const Buffer& buffer, void* data, std::size_t bytes);
+  void run();
+
+ private:
+  void begin_recording();
+  void barrier();
+  VkDescriptorSet allocate_set(const Kernel& kernel);
+
+  Context& context_;
+  VkCommandBuffer commands_ = VK_NULL_HANDLE;
+  VkFence fence_ = VK_NULL_HANDLE;
+  std::vector<VkDescriptorPool> pools_;
+  std::size_t pool_in_use_ = 0;
+  bool recording_ = false;
+  std::vector<std::function<void()>> after_run_;
+  std::vector<std::unique_ptr<Buffer>> staging_;  // per batch; released by run()
+};
+
+}  // namespace splat::vk
