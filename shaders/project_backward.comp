@@ -41,7 +41,7 @@ void main() {
     mat3 w = camera_rotation();
     vec3 t = camera_translation();
     vec3 p_world = load_mean(i);
-    vec3 p = w * p_world + t;
+    vec3 p = transform_point(w, t, p_world);
     vec3 v_p_world = vec3(0);
     vec3 v_p = vec3(0);
 

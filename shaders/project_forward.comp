@@ -33,7 +33,7 @@ void main() {
   sort_ids[i] = i;
   mat3 w = camera_rotation();
   vec3 p_world = load_mean(i);
-  vec3 p = w * p_world + camera_translation();
+  vec3 p = transform_point(w, camera_translation(), p_world);
   float opacity = sigmoid(opacity_logits[i]);
   opacities[i] = opacity;
   depths[i] = p.z;

@@ -20,7 +20,7 @@ void main() {
   }
   mat3 w = camera_rotation();
   vec3 p_world = load_mean(i);
-  vec3 p = w * p_world + camera_translation();
+  vec3 p = transform_point(w, camera_translation(), p_world);
   vec4 q = load_rotation(i);
   mat3 sigma = covariance_3d(q / length(q), load_log_scale(i));
   mat3 sigma_cam = w * sigma * transpose(w);

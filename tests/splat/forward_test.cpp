@@ -5,9 +5,13 @@
 
 #include "splat/cpu_reference.h"
 #include "splat/error.h"
+#include "support/backends.h"
 #include "support/random_scene.h"
 
 namespace {
+
+// Contract tests run on every backend.
+class RasterizerContract : public ::testing::TestWithParam<std::string> {};
 
 splat::Camera front_camera(int width = 64, int height = 48) {
   splat::Camera cam;
@@ -36,11 +40,11 @@ void add_splat(splat::Gaussians& g, float x, float y, float z, float sigma, floa
   g.sh[i * 3 + 2] = (b - 0.5f) / c0;
 }
 
-TEST(RasterizerForward, EmptySceneRendersBackground) {
-  splat::ThreadPool pool(2);
+TEST_P(RasterizerContract, EmptySceneRendersBackground) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   splat::RenderSettings settings;
   settings.background = {0.25f, 0.5f, 0.75f};
-  const auto f = splat::reference_forward<float>(splat::Gaussians{}, front_camera(), settings, pool);
+  const auto f = rasterizer.forward(splat::Gaussians{}, front_camera(), settings);
   for (std::size_t p = 0; p < f.alpha.size(); ++p) {
     ASSERT_EQ(f.alpha[p], 0.f) << "pixel " << p;
     ASSERT_EQ(f.depth[p], 0.f) << "pixel " << p;
@@ -48,14 +52,14 @@ TEST(RasterizerForward, EmptySceneRendersBackground) {
   }
 }
 
-TEST(RasterizerForward, SplatLandsWhereProjectionSaysWithExpectedPeakAlpha) {
+TEST_P(RasterizerContract, SplatLandsWhereProjectionSaysWithExpectedPeakAlpha) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   splat::Gaussians g;
   // Projects to (fx x/z + cx, fy y/z + cy) = (50*0.2/2 + 32, 50*(-0.1)/2 + 24) = (37, 21.5):
   // the centre of pixel (36, 21) is (36.5, 21.5), half a pixel off in x.
   add_splat(g, 0.2f, -0.1f, 2.f, 0.05f, 0.6f, 1.f, 0.5f, 0.25f);
-  splat::ThreadPool pool(2);
   const splat::Camera cam = front_camera();
-  const auto f = splat::reference_forward<float>(g, cam, {}, pool);
+  const auto f = rasterizer.forward(g, cam, {});
   EXPECT_NEAR(f.means2d[0], 37.f, 1e-5f);
   EXPECT_NEAR(f.means2d[1], 21.5f, 1e-5f);
   // EWA: cov2d = sigma^2 J J^T + 0.3 I with J = [[fx/z, 0, -fx x/z^2], [0, fy/z, -fy y/z^2]].
@@ -79,16 +83,16 @@ TEST(RasterizerForward, SplatLandsWhereProjectionSaysWithExpectedPeakAlpha) {
   EXPECT_TRUE(best % cam.width == 36 || best % cam.width == 37) << "peak at x " << best % cam.width;
 }
 
-TEST(RasterizerForward, NearSplatOccludesFarSplatWhateverTheInputOrder) {
-  splat::ThreadPool pool(2);
+TEST_P(RasterizerContract, NearSplatOccludesFarSplatWhateverTheInputOrder) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   const splat::Camera cam = front_camera();
   splat::Gaussians near_first, far_first;
   add_splat(near_first, 0, 0, 2, 0.2f, 0.99f, 1, 0, 0);
   add_splat(near_first, 0, 0, 4, 0.4f, 0.99f, 0, 0, 1);
   add_splat(far_first, 0, 0, 4, 0.4f, 0.99f, 0, 0, 1);
   add_splat(far_first, 0, 0, 2, 0.2f, 0.99f, 1, 0, 0);
-  const auto a = splat::reference_forward<float>(near_first, cam, {}, pool);
-  const auto b = splat::reference_forward<float>(far_first, cam, {}, pool);
+  const auto a = rasterizer.forward(near_first, cam, {});
+  const auto b = rasterizer.forward(far_first, cam, {});
   const std::size_t centre = 24 * cam.width + 32;
   EXPECT_GT(a.rgb[centre * 3], 0.9f) << "the near red splat should cover the centre";
   EXPECT_LT(a.rgb[centre * 3 + 2], 0.05f) << "the far blue splat should be hidden";
@@ -96,13 +100,13 @@ TEST(RasterizerForward, NearSplatOccludesFarSplatWhateverTheInputOrder) {
   for (std::size_t i = 0; i < a.rgb.size(); ++i) ASSERT_EQ(a.rgb[i], b.rgb[i]) << "value " << i;
 }
 
-TEST(RasterizerForward, CullsBehindCameraAndOffScreen) {
-  splat::ThreadPool pool(2);
+TEST_P(RasterizerContract, CullsBehindCameraAndOffScreen) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   splat::Gaussians g;
   add_splat(g, 0, 0, -2, 0.1f, 0.9f, 1, 1, 1);   // behind
   add_splat(g, 50, 0, 2, 0.1f, 0.9f, 1, 1, 1);   // far off to the right
   add_splat(g, 0, 0, 0.001f, 0.1f, 0.9f, 1, 1, 1);  // inside the near plane
-  const auto f = splat::reference_forward<float>(g, front_camera(), {}, pool);
+  const auto f = rasterizer.forward(g, front_camera(), {});
   EXPECT_EQ(f.stats.visible, 0u);
   EXPECT_EQ(f.stats.culled_depth, 2u);
   EXPECT_EQ(f.stats.culled_offscreen, 1u);
@@ -110,12 +114,12 @@ TEST(RasterizerForward, CullsBehindCameraAndOffScreen) {
   for (std::size_t p = 0; p < f.alpha.size(); ++p) ASSERT_EQ(f.alpha[p], 0.f) << "pixel " << p;
 }
 
-TEST(RasterizerForward, ZeroQuaternionIsCulledAsDegenerate) {
-  splat::ThreadPool pool(1);
+TEST_P(RasterizerContract, ZeroQuaternionIsCulledAsDegenerate) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   splat::Gaussians g;
   add_splat(g, 0, 0, 2, 0.1f, 0.9f, 1, 1, 1);
   g.rotations[0] = 0;
-  const auto f = splat::reference_forward<float>(g, front_camera(), {}, pool);
+  const auto f = rasterizer.forward(g, front_camera(), {});
   EXPECT_EQ(f.stats.culled_degenerate, 1u);
   for (float v : f.rgb) ASSERT_TRUE(std::isfinite(v));
 }
@@ -146,13 +150,13 @@ TEST(RasterizerForward, OutputIsBitIdenticalWhateverTheThreadCount) {
   ASSERT_EQ(ga.d_loss_d_pose, gb.d_loss_d_pose);
 }
 
-TEST(RasterizerForward, AlphaInUnitIntervalAndOutputsFinite) {
+TEST_P(RasterizerContract, AlphaInUnitIntervalAndOutputsFinite) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   gslam::test::SceneOptions options;
   options.count = 500;
   options.max_opacity = 0.99;
   const auto scene = gslam::test::make_random_scene<float>(options);
-  splat::ThreadPool pool(2);
-  const auto f = splat::reference_forward<float>(scene.gaussians, scene.camera, {}, pool);
+  const auto f = rasterizer.forward(scene.gaussians, scene.camera, {});
   for (std::size_t p = 0; p < f.alpha.size(); ++p) {
     ASSERT_GE(f.alpha[p], 0.f) << "pixel " << p;
     ASSERT_LE(f.alpha[p], 1.f) << "pixel " << p;
@@ -161,8 +165,8 @@ TEST(RasterizerForward, AlphaInUnitIntervalAndOutputsFinite) {
   for (float v : f.rgb) ASSERT_TRUE(std::isfinite(v));
 }
 
-TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
-  splat::ThreadPool pool(1);
+TEST_P(RasterizerContract, RejectsMismatchedSizesNaNAndBadCamera) {
+  GSLAM_REQUIRE_BACKEND(rasterizer, GetParam());
   splat::Gaussians g;
   add_splat(g, 0, 0, 2, 0.1f, 0.9f, 1, 1, 1);
   splat::Gaussians short_means = g;
@@ -170,7 +174,7 @@ TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
   EXPECT_THROW(
       {
         try {
-          splat::reference_forward<float>(short_means, front_camera(), {}, pool);
+          rasterizer.forward(short_means, front_camera(), {});
         } catch (const splat::Error& e) {
           EXPECT_STREQ(e.what(), "rasterize: means has 2 values, expected 3*N = 3 (N = 1 from opacity_logits)");
           throw;
@@ -182,7 +186,7 @@ TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
   EXPECT_THROW(
       {
         try {
-          splat::reference_forward<float>(nan, front_camera(), {}, pool);
+          rasterizer.forward(nan, front_camera(), {});
         } catch (const splat::Error& e) {
           EXPECT_NE(std::string(e.what()).find("log_scales of Gaussian 0 is nan"), std::string::npos) << e.what();
           throw;
@@ -194,7 +198,7 @@ TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
   EXPECT_THROW(
       {
         try {
-          splat::reference_forward<float>(g, zero, {}, pool);
+          rasterizer.forward(g, zero, {});
         } catch (const splat::Error& e) {
           EXPECT_NE(std::string(e.what()).find("image size is 0x48"), std::string::npos) << e.what();
           throw;
@@ -202,5 +206,9 @@ TEST(RasterizerForward, RejectsMismatchedSizesNaNAndBadCamera) {
       },
       splat::Error);
 }
+
+INSTANTIATE_TEST_SUITE_P(Backends, RasterizerContract,
+                         ::testing::ValuesIn(gslam::test::backend_names()),
+                         [](const auto& info) { return info.param; });
 
 }  // namespace

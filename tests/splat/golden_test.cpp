@@ -1,10 +1,13 @@
 // gsplat 1.5.3 golden vectors (from Brush): forward outputs and intermediates must match on
 // every element within |ours - ref| <= 1e-5 + 1e-2 |ref|, Brush's own criterion.
 #include <cmath>
+#include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
 #include "splat/cpu_reference.h"
+#include "support/backends.h"
 #include "support/golden_case.h"
 #include "support/test_data.h"
 
@@ -12,13 +15,20 @@ namespace {
 
 using gslam::test::GoldenCase;
 
-class GoldenForward : public ::testing::TestWithParam<const char*> {};
+// (backend, golden case file)
+using GoldenParam = std::tuple<std::string, const char*>;
+std::string golden_name(const ::testing::TestParamInfo<GoldenParam>& info) {
+  std::string file = std::get<1>(info.param);
+  return std::get<0>(info.param) + "_" + file.substr(0, file.find('.'));
+}
+
+class GoldenForward : public ::testing::TestWithParam<GoldenParam> {};
 
 TEST_P(GoldenForward, MatchesGsplatRenderAndIntermediates) {
-  GSLAM_REQUIRE_SHARED_DATA(path, std::string("gsplat_reference_render_brush/") + GetParam());
+  GSLAM_REQUIRE_SHARED_DATA(path, std::string("gsplat_reference_render_brush/") + std::get<1>(GetParam()));
+  GSLAM_REQUIRE_BACKEND(rasterizer, std::get<0>(GetParam()));
   const GoldenCase golden = gslam::test::load_golden_case(path);
-  splat::ThreadPool pool(2);
-  const auto frame = splat::reference_forward<float>(golden.gaussians, golden.camera, {}, pool);
+  const auto frame = rasterizer.forward(golden.gaussians, golden.camera, {});
   const std::size_t pixels = static_cast<std::size_t>(golden.camera.width) * golden.camera.height;
   const auto& ref_img = golden.tensor("out_img").values;
   for (std::size_t p = 0; p < pixels; ++p) {
@@ -52,17 +62,16 @@ TEST_P(GoldenForward, MatchesGsplatRenderAndIntermediates) {
   EXPECT_GT(frame.stats.visible, 0u) << "golden scene rendered nothing";
 }
 
-class GoldenBackward : public ::testing::TestWithParam<const char*> {};
+class GoldenBackward : public ::testing::TestWithParam<GoldenParam> {};
 
 // Feeds gsplat's dL/d(out_img) and compares every parameter gradient it computed.
 TEST_P(GoldenBackward, MatchesGsplatParameterGradients) {
-  GSLAM_REQUIRE_SHARED_DATA(path, std::string("gsplat_reference_render_brush/") + GetParam());
+  GSLAM_REQUIRE_SHARED_DATA(path, std::string("gsplat_reference_render_brush/") + std::get<1>(GetParam()));
+  GSLAM_REQUIRE_BACKEND(rasterizer, std::get<0>(GetParam()));
   const GoldenCase golden = gslam::test::load_golden_case(path);
-  splat::ThreadPool pool(2);
   splat::RenderSettings settings;
   settings.sh_direction_gradient = false;  // gsplat's convention for these vectors
-  const auto frame =
-      splat::reference_forward<float>(golden.gaussians, golden.camera, settings, pool);
+  const auto frame = rasterizer.forward(golden.gaussians, golden.camera, settings);
   const auto& v_img = golden.tensor("v_out_img").values;
   const std::size_t pixels = static_cast<std::size_t>(golden.camera.width) * golden.camera.height;
   splat::ImageGrads d_image;
@@ -72,7 +81,7 @@ TEST_P(GoldenBackward, MatchesGsplatParameterGradients) {
     for (int c = 0; c < 3; ++c) d_image.rgb[p * 3 + c] = v_img[p * 4 + c];
     d_image.alpha[p] = v_img[p * 4 + 3];
   }
-  const auto grads = splat::reference_backward<float>(frame, d_image, pool);
+  const auto grads = rasterizer.backward(frame, d_image);
   const std::pair<splat::ParamGroup, const char*> groups[] = {
       {splat::ParamGroup::kMeans, "v_means"},
       {splat::ParamGroup::kLogScales, "v_scales"},
@@ -99,10 +108,10 @@ TEST_P(GoldenBackward, MatchesGsplatParameterGradients) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(BothCases, GoldenBackward,
-                         ::testing::Values("tiny_case.safetensors", "basic_case.safetensors"));
-
-INSTANTIATE_TEST_SUITE_P(BothCases, GoldenForward,
-                         ::testing::Values("tiny_case.safetensors", "basic_case.safetensors"));
+const auto kGoldenParams =
+    ::testing::Combine(::testing::ValuesIn(gslam::test::backend_names()),
+                       ::testing::Values("tiny_case.safetensors", "basic_case.safetensors"));
+INSTANTIATE_TEST_SUITE_P(BackendsAndCases, GoldenBackward, kGoldenParams, golden_name);
+INSTANTIATE_TEST_SUITE_P(BackendsAndCases, GoldenForward, kGoldenParams, golden_name);
 
 }  // namespace

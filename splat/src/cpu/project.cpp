@@ -64,7 +64,7 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
     const std::size_t end = std::min(n, (chunk + 1) * kChunk);
     for (std::size_t i = chunk * kChunk; i < end; ++i) {
       const Vec3<T> p_world = load3(g.means, i);
-      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      const Vec3<T> p = transform_point(cam.rotation, cam.translation, p_world);
       const T opacity = sigmoid(g.opacity_logits[i]);
       frame.opacities[i] = opacity;
       frame.depths[i] = p.z;
@@ -171,7 +171,7 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
     Vec3<T> v_t(0);
     for (std::size_t i = chunk * kChunk; i < end; ++i) {
       const Vec3<T> p_world = load3(g.means, i);
-      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      const Vec3<T> p = transform_point(cam.rotation, cam.translation, p_world);
       Vec3<T> v_p_world(0);  // dL/d mean (world)
       Vec3<T> v_p(0);        // dL/d p_cam
 
@@ -281,7 +281,7 @@ std::vector<T> project_pose_jvp(const ForwardResultT<T>& frame, ThreadPool& pool
       if (frame.radii[i * 2] <= 0 && frame.radii[i * 2 + 1] <= 0) continue;
       T* jac = &out[i * kScreenValues * 6];
       const Vec3<T> p_world = load3(g.means, i);
-      const Vec3<T> p = cam.rotation * p_world + cam.translation;
+      const Vec3<T> p = transform_point(cam.rotation, cam.translation, p_world);
       const Vec4<T> q = load4(g.rotations, i);
       const Mat3<T> sigma = covariance_3d(q / glm::length(q), load3(g.log_scales, i));
       const Mat3<T> sigma_cam = cam.rotation * sigma * glm::transpose(cam.rotation);

@@ -1,0 +1,184 @@
+// The Vulkan backend against the CPU reference (runs on lavapipe in CI), and its device
+// handling. Skipped without a device unless GSLAM_REQUIRE_GPU_TESTS makes that a failure.
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "splat/error.h"
+#include "splat/vulkan_rasterizer.h"
+#include "support/backends.h"
+#include "support/expect_error.h"
+#include "support/parity.h"
+#include "support/random_scene.h"
+
+namespace {
+
+using gslam::test::SceneOptions;
+
+struct ParityCase {
+  const char* name;
+  SceneOptions scene;
+};
+
+SceneOptions scene(uint32_t seed, int count, int degree, int width, int height, double max_opacity) {
+  SceneOptions o;
+  o.seed = seed;
+  o.count = count;
+  o.sh_degree = degree;
+  o.width = width;
+  o.height = height;
+  o.max_opacity = max_opacity;
+  return o;
+}
+
+// From a few smooth splats to thousands of nearly opaque ones (pixels that saturate and stop
+// early), image sizes that are and are not multiples of the tile, every SH degree.
+const ParityCase kCases[] = {
+    {"Few", scene(1, 8, 3, 64, 48, 0.8)},
+    {"Hundreds", scene(2, 300, 2, 100, 70, 0.99)},
+    {"Thousands", scene(3, 3000, 1, 160, 120, 0.99)},
+    {"RaggedTiles", scene(4, 2000, 0, 131, 77, 0.99)},
+};
+
+class VulkanParity : public ::testing::TestWithParam<ParityCase> {};
+
+// Fixed-seed upstream gradients for every output.
+splat::ImageGrads random_image_grads(const splat::ForwardResult& f, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  splat::ImageGrads d;
+  d.rgb.resize(f.rgb.size());
+  d.alpha.resize(f.alpha.size());
+  d.depth.resize(f.depth.size());
+  for (float& v : d.rgb) v = u(rng);
+  for (float& v : d.alpha) v = u(rng);
+  for (float& v : d.depth) v = 0.2f * u(rng);
+  return d;
+}
+
+TEST_P(VulkanParity, ForwardMatchesCpuStageByStage) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  splat::RenderSettings settings;
+  settings.background = {0.1f, 0.4f, 0.7f};
+  const auto a = cpu.forward(s.gaussians, s.camera, settings);
+  const auto b = gpu.forward(s.gaussians, s.camera, settings);
+  EXPECT_GT(a.stats.intersections, 0u);
+  gslam::test::expect_forward_parity(a, b, true, GetParam().name);
+}
+
+TEST_P(VulkanParity, BackwardMatchesCpuForEveryParameterGroupAndThePose) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  const auto a = cpu.forward(s.gaussians, s.camera, {});
+  const auto b = gpu.forward(s.gaussians, s.camera, {});
+  const splat::ImageGrads d = random_image_grads(a, 7);
+  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(b, d), GetParam().name);
+}
+
+TEST_P(VulkanParity, PoseJacobianMatchesCpu) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  const auto a = cpu.forward(s.gaussians, s.camera, {});
+  const auto b = gpu.forward(s.gaussians, s.camera, {});
+  gslam::test::expect_relative_parity(cpu.pose_jacobian(a), gpu.pose_jacobian(b),
+                                      std::string(GetParam().name) + " pose Jacobian");
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, VulkanParity, ::testing::ValuesIn(kCases),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(VulkanBackend, RenderSettingsMatchCpu) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(scene(5, 400, 3, 96, 64, 0.95));
+  splat::RenderSettings settings;
+  settings.sh_degree = 1;  // the map has degree 3: coefficients above 1 are ignored
+  settings.sh_direction_gradient = false;
+  settings.background = {1.f, 0.5f, 0.f};
+  const auto a = cpu.forward(s.gaussians, s.camera, settings);
+  const auto b = gpu.forward(s.gaussians, s.camera, settings);
+  gslam::test::expect_forward_parity(a, b, true, "sh degree 1");
+  const splat::ImageGrads d = random_image_grads(a, 3);
+  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(b, d), "sh degree 1");
+}
+
+// Backward on a forward result the Vulkan backend did not make (here the CPU's) renders its
+// inputs again on the device rather than failing or using stale buffers.
+TEST(VulkanBackend, BackwardAcceptsAForwardResultFromAnotherBackend) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(scene(6, 200, 2, 80, 60, 0.9));
+  const auto a = cpu.forward(s.gaussians, s.camera, {});
+  const splat::ImageGrads d = random_image_grads(a, 11);
+  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(a, d), "cpu forward");
+}
+
+// Buffers grow with the map and are reused across frames: small, large, small again.
+TEST(VulkanBackend, BuffersGrowWithTheMapAndReportDeviceMemory) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  for (int count : {50, 20000, 50}) {
+    const auto s = gslam::test::make_random_scene<float>(scene(8, count, 1, 128, 96, 0.9));
+    const auto a = cpu.forward(s.gaussians, s.camera, {});
+    const auto b = gpu.forward(s.gaussians, s.camera, {});
+    gslam::test::expect_forward_parity(a, b, false, std::to_string(count) + " Gaussians");
+    // Means, log-scales, rotations and SH alone take 13 floats per Gaussian on the device.
+    EXPECT_GE(gpu.device_memory_bytes(), std::size_t(count) * 13 * 4) << count << " Gaussians";
+  }
+}
+
+TEST(VulkanBackend, ResultsAreDeterministic) {
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(scene(9, 1500, 2, 96, 64, 0.99));
+  const auto a = gpu.forward(s.gaussians, s.camera, {});
+  const auto b = gpu.forward(s.gaussians, s.camera, {});
+  EXPECT_EQ(a.rgb, b.rgb);
+  EXPECT_EQ(a.sorted_ids, b.sorted_ids);
+  const splat::ImageGrads d = random_image_grads(a, 5);
+  const auto ga = gpu.backward(a, d), gb = gpu.backward(b, d);
+  EXPECT_EQ(ga.d_gaussians.means, gb.d_gaussians.means);
+  EXPECT_EQ(ga.d_loss_d_pose, gb.d_loss_d_pose);
+}
+
+TEST(VulkanBackend, EmptyMapGivesBackgroundAndZeroGradients) {
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  splat::Camera cam;
+  cam.width = 40;
+  cam.height = 30;
+  cam.fx = cam.fy = 30;
+  cam.cx = 20;
+  cam.cy = 15;
+  const splat::Gaussians empty;
+  const auto f = gpu.forward(empty, cam, {});
+  ASSERT_EQ(f.alpha.size(), 1200u);
+  for (float a : f.alpha) ASSERT_EQ(a, 0.f);
+  splat::ImageGrads d;
+  d.rgb.assign(f.rgb.size(), 1.f);
+  const auto g = gpu.backward(f, d);
+  EXPECT_EQ(g.d_gaussians.size(), 0u);
+  EXPECT_EQ(g.d_loss_d_pose, splat::PoseGradient::Zero());
+}
+
+TEST(VulkanDevice, ListsDevicesAndRejectsAnIndexOutOfRange) {
+  if (!splat::vulkan_backend_built()) GTEST_SKIP() << "this build has no Vulkan backend";
+  std::vector<splat::VulkanDeviceInfo> devices;
+  try {
+    devices = splat::list_vulkan_devices();
+  } catch (const splat::Error& e) {
+    if (gslam::test::gpu_tests_required()) FAIL() << e.what();
+    GTEST_SKIP() << e.what();
+  }
+  ASSERT_FALSE(devices.empty());
+  for (const auto& d : devices) {
+    EXPECT_FALSE(d.name.empty());
+    EXPECT_EQ(d.usable, d.problem.empty()) << d.name;
+  }
+  GSLAM_EXPECT_ERROR(splat::make_vulkan_rasterizer({99}), "--device 99 out of range");
+}
+
+}  // namespace
