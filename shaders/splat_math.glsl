@@ -3,16 +3,10 @@
 #ifndef GSLAM_SPLAT_MATH_GLSL
 #define GSLAM_SPLAT_MATH_GLSL
 
-// p_cam = W p + t with one fixed rounding sequence (nested fused multiply-adds; `precise`
-// forbids re-association), as transform_point in the CPU reference: both backends get
-// bit-identical depths, so near-equal depths sort alike.
-vec3 transform_point(mat3 w, vec3 t, vec3 p) {
-  precise vec3 r;
-  for (int row = 0; row < 3; ++row) {
-    r[row] = fma(w[0][row], p.x, fma(w[1][row], p.y, fma(w[2][row], p.z, t[row])));
-  }
-  return r;
-}
+// p_cam = W p + t evaluated in double and rounded once, as transform_point in the CPU
+// reference: both backends get bit-identical camera depths (float evaluation differs by an ulp
+// with the order of operations and fused multiply-adds), so near-equal depths sort alike.
+vec3 transform_point(mat3 w, vec3 t, vec3 p) { return vec3(dmat3(w) * dvec3(p) + dvec3(t)); }
 
 float frobenius(mat3 a, mat3 b) { return dot(a[0], b[0]) + dot(a[1], b[1]) + dot(a[2], b[2]); }
 

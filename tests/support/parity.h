@@ -27,7 +27,16 @@ void expect_forward_parity(const splat::ForwardResult& cpu, const splat::Forward
 void expect_relative_parity(const std::vector<float>& ref, const std::vector<float>& ours,
                             const std::string& label);
 
+// How backward results are compared: element by element (the rule above), or per group by
+// the norm-wise relative error ||gpu - cpu|| / ||cpu|| <= kGradientParity. Real maps with
+// per-pixel noise as the upstream gradient make elements that are sums of thousands of
+// cancelling terms; there the CPU float reference itself misses the element-wise rule against
+// the double reference (measured up to 4.4x the bound on the donut), so only the norm-wise
+// error is meaningful.
+enum class GradientRule { kElementwise, kNormwise };
+
 void expect_backward_parity(const splat::BackwardResult& cpu, const splat::BackwardResult& gpu,
-                            const std::string& label);
+                            const std::string& label,
+                            GradientRule rule = GradientRule::kElementwise);
 
 }  // namespace gslam::test

@@ -29,16 +29,12 @@ auto frobenius(const M& a, const M& b) {
   return sum;
 }
 
-// p_cam = W p + t with one fixed rounding sequence (nested fused multiply-adds, which the
-// compiler may not re-associate or contract differently), as transform_point in the shaders:
-// both backends get bit-identical depths, so near-equal depths sort alike.
+// p_cam = W p + t evaluated in double and rounded once, as transform_point in the shaders: both
+// backends get bit-identical camera depths (float evaluation differs by an ulp with the order of
+// operations and fused multiply-adds), so near-equal depths sort alike.
 template <typename T>
 Vec3<T> transform_point(const Mat3<T>& w, const Vec3<T>& t, const Vec3<T>& p) {
-  Vec3<T> r;
-  for (int row = 0; row < 3; ++row) {
-    r[row] = std::fma(w[0][row], p.x, std::fma(w[1][row], p.y, std::fma(w[2][row], p.z, t[row])));
-  }
-  return r;
+  return Vec3<T>(Mat3<double>(w) * Vec3<double>(p) + Vec3<double>(t));
 }
 
 // Rotation matrix of a unit quaternion q = (w, x, y, z).

@@ -91,8 +91,12 @@ VulkanDeviceInfo describe_device(VkPhysicalDevice physical, int index) {
   info.api_version = version_string(p.apiVersion);
   info.subgroup_size = subgroup.subgroupSize;
   const VkSubgroupFeatureFlags ops = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  VkPhysicalDeviceFeatures features;
+  vkGetPhysicalDeviceFeatures(physical, &features);
   if (p.apiVersion < VK_API_VERSION_1_2) {
     info.problem = "Vulkan " + info.api_version + " < 1.2";
+  } else if (!features.shaderFloat64) {
+    info.problem = "no shaderFloat64 (camera transform in double)";
   } else if (!(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
              (subgroup.supportedOperations & ops) != ops) {
     info.problem = "no subgroup arithmetic in compute shaders";
@@ -173,7 +177,10 @@ Context::Context(int device_index) {
     queue_info.queueFamilyIndex = family;
     queue_info.queueCount = 1;
     queue_info.pQueuePriorities = &priority;
+    VkPhysicalDeviceFeatures features{};
+    features.shaderFloat64 = VK_TRUE;
     VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    device_info.pEnabledFeatures = &features;
     device_info.queueCreateInfoCount = 1;
     device_info.pQueueCreateInfos = &queue_info;
     vk_check(vkCreateDevice(physical_, &device_info, nullptr, &device_), "vkCreateDevice");
