@@ -1,12 +1,18 @@
-// Forward and forward+backward on the donut workload (bench/donut_workload.h).
+// Forward and forward+backward on the donut workload (bench/donut_workload.h), on every
+// backend that can run here (cpu; vulkan when a device exists), in one table.
 // Run: build/bench/rasterizer_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
 #include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "donut_workload.h"
+#include "splat/error.h"
 #include "splat/rasterizer.h"
+#include "splat/vulkan_rasterizer.h"
 
 namespace {
 
@@ -17,7 +23,15 @@ const gslam::bench::Workload* workload(std::size_t count, int width, int height)
   return cache[key] ? &*cache[key] : nullptr;
 }
 
-void run(benchmark::State& state, bool backward) {
+// One rasterizer per backend for the whole run (Vulkan pipelines are built once).
+splat::Rasterizer* backend(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<splat::Rasterizer>> cache;
+  auto& r = cache[name];
+  if (!r) r = name == "cpu" ? splat::make_cpu_rasterizer() : splat::make_vulkan_rasterizer();
+  return r.get();
+}
+
+void run(benchmark::State& state, const std::string& backend_name, bool backward) {
   const std::size_t count = static_cast<std::size_t>(state.range(0));
   const int width = static_cast<int>(state.range(1)), height = static_cast<int>(state.range(2));
   const gslam::bench::Workload* w = workload(count, width, height);
@@ -25,7 +39,7 @@ void run(benchmark::State& state, bool backward) {
     state.SkipWithError(("donut map not found under " + gslam::bench::shared_data_dir()).c_str());
     return;
   }
-  auto rasterizer = splat::make_cpu_rasterizer();
+  splat::Rasterizer* rasterizer = backend(backend_name);
   splat::ImageGrads d_image;
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
   d_image.rgb.assign(pixels * 3, 1e-3f);
@@ -46,19 +60,30 @@ void run(benchmark::State& state, bool backward) {
   state.SetLabel(rasterizer->name());
 }
 
-void BM_CpuForward(benchmark::State& state) { run(state, false); }
-void BM_CpuForwardBackward(benchmark::State& state) { run(state, true); }
-
 void sizes(benchmark::internal::Benchmark* b) {
   for (long count : {100000L, 1000000L}) {
     b->Args({count, 640, 480});
+    b->Args({count, 1280, 720});
   }
-  b->Args({100000L, 1280, 720});
   b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 }
 
 }  // namespace
 
-BENCHMARK(BM_CpuForward)->Apply(sizes);
-BENCHMARK(BM_CpuForwardBackward)->Apply(sizes);
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  std::vector<std::string> backends{"cpu"};
+  try {
+    backend("vulkan");
+    backends.push_back("vulkan");
+  } catch (const splat::Error& e) {
+    std::fprintf(stderr, "vulkan backend not benchmarked: %s\n", e.what());
+  }
+  for (const std::string& name : backends) {
+    benchmark::RegisterBenchmark(("Forward/" + name).c_str(), run, name, false)->Apply(sizes);
+    benchmark::RegisterBenchmark(("ForwardBackward/" + name).c_str(), run, name, true)->Apply(sizes);
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

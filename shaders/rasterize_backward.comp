@@ -1,14 +1,22 @@
 #version 450
 // Compositing backward: one workgroup per 16x16 tile, one invocation per pixel, walking the
-// tile's splats back to front from the last one any pixel used (kBackwardBatch at a time in
-// shared memory). Each splat's gradients are summed over the tile's pixels (subgroupAdd, then
-// the subgroup partials in a fixed order) and written to its intersection's kGradSlots slots:
-// every intersection belongs to one tile, so no atomics are needed and the result is
-// deterministic on a given device. Reads bindings 0..12; writes 13 (zeroed by the host first,
-// so intersections behind every pixel's last contributor keep zero).
+// tile's splats back to front from the last one any pixel used, a batch at a time in shared
+// memory. Each splat's gradients are summed over the tile's pixels into its intersection's
+// kGradSlots slots (every intersection belongs to one tile), in one of two ways:
+// - GSLAM_FLOAT_ATOMICS (VK_EXT_shader_atomic_float): subgroupAdd, then one float atomicAdd
+//   per subgroup; batches of kGroupSize splats. Subgroups add in varying order, so the last
+//   bits vary from run to run.
+// - portable: subgroupAdd, the partials kept in shared memory and summed in subgroup order after
+//   each batch of kBackwardBatch splats; deterministic, more barriers.
+// Reads bindings 0..12; writes 13 (zeroed by the host first, so intersections behind every
+// pixel's last contributor keep zero).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#ifdef GSLAM_FLOAT_ATOMICS
+#extension GL_EXT_shader_atomic_float : require
+#endif
 #include "composite.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
@@ -17,12 +25,17 @@ layout(std430, binding = 9) readonly buffer FinalTrans { float final_transmittan
 layout(std430, binding = 10) readonly buffer DRgb { float d_rgb[]; };      // [H, W, 3]
 layout(std430, binding = 11) readonly buffer DAlpha { float d_alpha[]; };  // [H, W]
 layout(std430, binding = 12) readonly buffer DDepth { float d_depth[]; };  // [H, W]
-layout(std430, binding = 13) writeonly buffer IsectGrads { float isect_grads[]; };  // [M, kGradSlots]
+layout(std430, binding = 13) buffer IsectGrads { float isect_grads[]; };  // [M, kGradSlots]
 // Which upstream gradients exist (an absent one is zero and its buffer is a placeholder).
 layout(push_constant) uniform Push { uint has_rgb; uint has_alpha; uint has_depth; } push;
 
-shared Splat batch[kBackwardBatch];
-shared float partials[kBackwardBatch][kGradSlots][kMaxSubgroups];
+#ifdef GSLAM_FLOAT_ATOMICS
+const uint kBatch = kGroupSize;
+#else
+const uint kBatch = kBackwardBatch;
+shared float partials[kBatch][kGradSlots][kMaxSubgroups];
+#endif
+shared Splat batch[kBatch];
 shared uint tile_last;
 
 void main() {
@@ -56,7 +69,7 @@ void main() {
   barrier();
   uint stop = max(tile_last, begin);
   for (uint hi = stop; hi > begin;) {
-    uint lo = hi - min(kBackwardBatch, hi - begin);
+    uint lo = hi - min(kBatch, hi - begin);
     uint count = hi - lo;
     if (tid < count) batch[tid] = load_splat(sorted_ids[lo + tid]);
     barrier();
@@ -88,9 +101,24 @@ void main() {
       g[kSlotGreen] = weight * v_rgb.g;
       g[kSlotBlue] = weight * v_rgb.b;
       g[kSlotDepth] = weight * v_z;
-      for (uint slot = 0u; slot < kGradSlots; ++slot) {
-        float sum = subgroupAdd(g[slot]);
-        if (subgroupElect()) partials[k][slot][gl_SubgroupID] = sum;
+      // Most splats touch few of a subgroup's pixels: skip the reductions when none.
+      bool any_live = subgroupAny(live > 0);
+#ifdef GSLAM_FLOAT_ATOMICS
+      if (any_live) {
+        for (uint slot = 0u; slot < kGradSlots; ++slot) {
+          float sum = subgroupAdd(g[slot]);
+          if (subgroupElect()) atomicAdd(isect_grads[s * kGradSlots + slot], sum);
+        }
+      }
+    }
+#else
+      if (any_live) {
+        for (uint slot = 0u; slot < kGradSlots; ++slot) {
+          float sum = subgroupAdd(g[slot]);
+          if (subgroupElect()) partials[k][slot][gl_SubgroupID] = sum;
+        }
+      } else if (subgroupElect()) {
+        for (uint slot = 0u; slot < kGradSlots; ++slot) partials[k][slot][gl_SubgroupID] = 0;
       }
     }
     barrier();
@@ -101,6 +129,7 @@ void main() {
       for (uint sg = 0u; sg < gl_NumSubgroups; ++sg) sum += partials[k][slot][sg];
       isect_grads[(lo + k) * kGradSlots + slot] = sum;
     }
+#endif
     barrier();
     hi = lo;
   }

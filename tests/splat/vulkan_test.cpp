@@ -1,6 +1,7 @@
 // The Vulkan backend against the CPU reference (runs on lavapipe in CI), and its device
 // handling. Skipped without a device unless GSLAM_REQUIRE_GPU_TESTS makes that a failure.
 #include <random>
+#include <tuple>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -41,7 +42,12 @@ const ParityCase kCases[] = {
     {"RaggedTiles", scene(4, 2000, 0, 131, 77, 0.99)},
 };
 
-class VulkanParity : public ::testing::TestWithParam<ParityCase> {};
+// (Vulkan variant, scene): both backward reductions are checked.
+class VulkanParity : public ::testing::TestWithParam<std::tuple<const char*, ParityCase>> {
+ protected:
+  const char* variant() const { return std::get<0>(GetParam()); }
+  const ParityCase& parity_case() const { return std::get<1>(GetParam()); }
+};
 
 // Fixed-seed upstream gradients for every output.
 splat::ImageGrads random_image_grads(const splat::ForwardResult& f, uint32_t seed) {
@@ -59,38 +65,43 @@ splat::ImageGrads random_image_grads(const splat::ForwardResult& f, uint32_t see
 
 TEST_P(VulkanParity, ForwardMatchesCpuStageByStage) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
-  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
-  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  GSLAM_REQUIRE_BACKEND(gpu, variant());
+  const auto s = gslam::test::make_random_scene<float>(parity_case().scene);
   splat::RenderSettings settings;
   settings.background = {0.1f, 0.4f, 0.7f};
   const auto a = cpu.forward(s.gaussians, s.camera, settings);
   const auto b = gpu.forward(s.gaussians, s.camera, settings);
   EXPECT_GT(a.stats.intersections, 0u);
-  gslam::test::expect_forward_parity(a, b, true, GetParam().name);
+  gslam::test::expect_forward_parity(a, b, true, parity_case().name);
 }
 
 TEST_P(VulkanParity, BackwardMatchesCpuForEveryParameterGroupAndThePose) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
-  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
-  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  GSLAM_REQUIRE_BACKEND(gpu, variant());
+  const auto s = gslam::test::make_random_scene<float>(parity_case().scene);
   const auto a = cpu.forward(s.gaussians, s.camera, {});
   const auto b = gpu.forward(s.gaussians, s.camera, {});
   const splat::ImageGrads d = random_image_grads(a, 7);
-  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(b, d), GetParam().name);
+  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(b, d), parity_case().name);
 }
 
 TEST_P(VulkanParity, PoseJacobianMatchesCpu) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
-  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
-  const auto s = gslam::test::make_random_scene<float>(GetParam().scene);
+  GSLAM_REQUIRE_BACKEND(gpu, variant());
+  const auto s = gslam::test::make_random_scene<float>(parity_case().scene);
   const auto a = cpu.forward(s.gaussians, s.camera, {});
   const auto b = gpu.forward(s.gaussians, s.camera, {});
   gslam::test::expect_relative_parity(cpu.pose_jacobian(a), gpu.pose_jacobian(b),
-                                      std::string(GetParam().name) + " pose Jacobian");
+                                      std::string(parity_case().name) + " pose Jacobian");
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, VulkanParity, ::testing::ValuesIn(kCases),
-                         [](const auto& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(Scenes, VulkanParity,
+                         ::testing::Combine(::testing::Values("vulkan", "vulkan_portable"),
+                                            ::testing::ValuesIn(kCases)),
+                         [](const auto& info) {
+                           return std::string(std::get<0>(info.param)) + "_" +
+                                  std::get<1>(info.param).name;
+                         });
 
 TEST(VulkanBackend, RenderSettingsMatchCpu) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
@@ -132,8 +143,9 @@ TEST(VulkanBackend, BuffersGrowWithTheMapAndReportDeviceMemory) {
   }
 }
 
-TEST(VulkanBackend, ResultsAreDeterministic) {
-  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+// The portable reduction is deterministic bit for bit (float atomics add in varying order).
+TEST(VulkanBackend, PortableReductionIsDeterministic) {
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan_portable");
   const auto s = gslam::test::make_random_scene<float>(scene(9, 1500, 2, 96, 64, 0.99));
   const auto a = gpu.forward(s.gaussians, s.camera, {});
   const auto b = gpu.forward(s.gaussians, s.camera, {});

@@ -39,6 +39,10 @@ splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not)
         entry.rasterizer = splat::make_cpu_rasterizer({2});
       } else if (name == "vulkan") {
         entry.rasterizer = splat::make_vulkan_rasterizer({});
+      } else if (name == "vulkan_portable") {
+        splat::VulkanOptions options;
+        options.float_atomics = false;
+        entry.rasterizer = splat::make_vulkan_rasterizer(options);
       } else {
         entry.why_not = "unknown backend";
       }

@@ -13,7 +13,8 @@ namespace gslam::test {
 std::vector<std::string> backend_names();
 
 // One rasterizer per backend for the whole test process (creating Vulkan pipelines is slow),
-// or null with the reason when the backend cannot run here.
+// or null with the reason when the backend cannot run here. Names: "cpu", "vulkan" (float
+// atomics where the device has them) and "vulkan_portable" (the portable reduction).
 splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not);
 
 // Whether a missing Vulkan device fails tests instead of skipping them (GSLAM_REQUIRE_GPU_TESTS,

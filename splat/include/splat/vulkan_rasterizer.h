@@ -11,6 +11,9 @@ namespace splat {
 
 struct VulkanOptions {
   int device = -1;  // index into list_vulkan_devices(); -1 picks the best usable device
+  // Backward reduction: float atomics (VK_EXT_shader_atomic_float) where the device has them,
+  // the fastest, or false for the portable one, which is also bit-for-bit deterministic.
+  bool float_atomics = true;
 };
 
 struct VulkanDeviceInfo {
@@ -19,6 +22,7 @@ struct VulkanDeviceInfo {
   std::string type;          // "discrete", "integrated", "virtual", "cpu" or "other"
   std::string api_version;   // e.g. "1.3.238"
   uint32_t subgroup_size = 0;
+  bool float_atomics = false;  // VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd
   bool usable = false;
   std::string problem;       // why the backend cannot run on it, when not usable
 };

@@ -90,7 +90,8 @@ VulkanDeviceInfo describe_device(VkPhysicalDevice physical, int index) {
   }
   info.api_version = version_string(p.apiVersion);
   info.subgroup_size = subgroup.subgroupSize;
-  const VkSubgroupFeatureFlags ops = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  const VkSubgroupFeatureFlags ops =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
   VkPhysicalDeviceFeatures features;
   vkGetPhysicalDeviceFeatures(physical, &features);
   if (p.apiVersion < VK_API_VERSION_1_2) {
@@ -99,7 +100,7 @@ VulkanDeviceInfo describe_device(VkPhysicalDevice physical, int index) {
     info.problem = "no shaderFloat64 (camera transform in double)";
   } else if (!(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
              (subgroup.supportedOperations & ops) != ops) {
-    info.problem = "no subgroup arithmetic in compute shaders";
+    info.problem = "no subgroup vote and arithmetic in compute shaders";
   } else if (subgroup.subgroupSize < io::kGroupSize / io::kMaxSubgroups) {
     info.problem = "subgroup size " + std::to_string(subgroup.subgroupSize) + " < 8";
   } else if (p.limits.maxPerStageDescriptorStorageBuffers < kMostStorageBuffers) {
@@ -119,10 +120,26 @@ VulkanDeviceInfo describe_device(VkPhysicalDevice physical, int index) {
     if (!compute) info.problem = "no compute queue";
   }
   info.usable = info.problem.empty();
+  uint32_t extension_count = 0;
+  vkEnumerateDeviceExtensionProperties(physical, nullptr, &extension_count, nullptr);
+  std::vector<VkExtensionProperties> extensions(extension_count);
+  vkEnumerateDeviceExtensionProperties(physical, nullptr, &extension_count, extensions.data());
+  const bool has_atomic_float = std::any_of(extensions.begin(), extensions.end(), [](const auto& e) {
+    return std::string(e.extensionName) == VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME;
+  });
+  if (has_atomic_float) {
+    VkPhysicalDeviceShaderAtomicFloatFeaturesEXT atomic{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+    VkPhysicalDeviceFeatures2 features2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    features2.pNext = &atomic;
+    vkGetPhysicalDeviceFeatures2(physical, &features2);
+    info.float_atomics = atomic.shaderBufferFloat32AtomicAdd == VK_TRUE;
+  }
   return info;
 }
 
-Context::Context(int device_index) {
+Context::Context(const VulkanOptions& options) {
+  const int device_index = options.device;
   instance_ = create_instance();
   try {
     uint32_t count = 0;
@@ -181,6 +198,16 @@ Context::Context(int device_index) {
     features.shaderFloat64 = VK_TRUE;
     VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
     device_info.pEnabledFeatures = &features;
+    float_atomics_ = options.float_atomics && info_.float_atomics;
+    VkPhysicalDeviceShaderAtomicFloatFeaturesEXT atomic{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+    const char* atomic_extension = VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME;
+    if (float_atomics_) {
+      atomic.shaderBufferFloat32AtomicAdd = VK_TRUE;
+      device_info.pNext = &atomic;
+      device_info.enabledExtensionCount = 1;
+      device_info.ppEnabledExtensionNames = &atomic_extension;
+    }
     device_info.queueCreateInfoCount = 1;
     device_info.pQueueCreateInfos = &queue_info;
     vk_check(vkCreateDevice(physical_, &device_info, nullptr, &device_), "vkCreateDevice");

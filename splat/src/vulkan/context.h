@@ -17,9 +17,10 @@ void vk_check(VkResult result, const char* what);
 
 class Context {
  public:
-  // device_index: an index of list_vulkan_devices(), or -1 for the best usable device
-  // (discrete, then integrated, then virtual, then CPU). Throws splat::Error if none is usable.
-  explicit Context(int device_index);
+  // options.device: an index of list_vulkan_devices(), or -1 for the best usable device
+  // (discrete, then integrated, then virtual, then CPU). Enables float atomics if asked for
+  // and offered. Throws splat::Error if no device is usable.
+  explicit Context(const VulkanOptions& options);
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -28,6 +29,7 @@ class Context {
   VkQueue queue() const { return queue_; }
   VkCommandPool command_pool() const { return command_pool_; }
   const VulkanDeviceInfo& info() const { return info_; }
+  bool float_atomics_enabled() const { return float_atomics_; }
   // Index of a memory type allowed by type_bits that has all of `required`, preferring
   // ones that also have `preferred`. Throws if none.
   uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
@@ -48,6 +50,7 @@ class Context {
   VkPhysicalDeviceMemoryProperties memory_{};
   VulkanDeviceInfo info_;
   std::atomic<std::size_t> allocated_{0};
+  bool float_atomics_ = false;
 };
 
 // Creates an instance for Vulkan 1.2; throws if the loader or driver is missing.

@@ -11,6 +11,7 @@
 #include "project_backward_spv.h"
 #include "project_forward_spv.h"
 #include "project_pose_jvp_spv.h"
+#include "rasterize_backward_atomic_spv.h"
 #include "rasterize_backward_spv.h"
 #include "rasterize_forward_spv.h"
 #include "rasterize_pose_jvp_spv.h"
@@ -111,7 +112,7 @@ void download_into(CommandBatch& batch, const Buffer& buffer, std::vector<T>& ou
 class VulkanRasterizer final : public Rasterizer {
  public:
   explicit VulkanRasterizer(const VulkanOptions& options)
-      : context_(std::make_shared<Context>(options.device)),
+      : context_(std::make_shared<Context>(options)),
         pool_(std::make_shared<StatePool>()),
         batch_(*context_),
         scan_(*context_),
@@ -121,7 +122,11 @@ class VulkanRasterizer final : public Rasterizer {
         tiles_emit_(*context_, kTilesEmitSpv, 9, "tiles_emit"),
         tiles_finish_(*context_, kTilesFinishSpv, 6, "tiles_finish"),
         rasterize_forward_(*context_, kRasterizeForwardSpv, 14, "rasterize_forward"),
-        rasterize_backward_(*context_, kRasterizeBackwardSpv, 14, "rasterize_backward"),
+        rasterize_backward_(*context_,
+                            context_->float_atomics_enabled()
+                                ? std::span<const uint32_t>(kRasterizeBackwardAtomicSpv)
+                                : std::span<const uint32_t>(kRasterizeBackwardSpv),
+                            14, "rasterize_backward"),
         project_backward_(*context_, kProjectBackwardSpv, 17, "project_backward"),
         project_pose_jvp_(*context_, kProjectPoseJvpSpv, 9, "project_pose_jvp"),
         rasterize_pose_jvp_(*context_, kRasterizePoseJvpSpv, 11, "rasterize_pose_jvp"),
@@ -131,7 +136,8 @@ class VulkanRasterizer final : public Rasterizer {
 
   std::string name() const override {
     const VulkanDeviceInfo& info = context_->info();
-    return "vulkan (device " + std::to_string(info.index) + ": " + info.name + ", " + info.type + ")";
+    return "vulkan (device " + std::to_string(info.index) + ": " + info.name + ", " + info.type +
+           (context_->float_atomics_enabled() ? ", float atomics" : ", portable reduction") + ")";
   }
 
   std::size_t device_memory_bytes() const override { return context_->allocated_bytes(); }
