@@ -129,6 +129,7 @@ int run_reconstruct(const ReconstructOptions& o) {
         {"tracking_failures", failures},
         {"tracking_retries", retries},
         {"peak_memory_mib", peak_memory_mib()},
+        {"device_memory_mib", static_cast<double>(rasterizer->device_memory_bytes()) / (1 << 20)},
     };
     if (complete && dataset.has_ground_truth()) {
       std::vector<StampedPose> truth;

@@ -101,7 +101,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"TrajectoryWithoutIntrinsics", "render {dir}/map.ply --out {dir}/o --trajectory {dir}/bad.txt",
                 "--intrinsics"},
         BadCase{"BadFormat", "render {dir}/map.ply --out {dir}/o --format jpg", "format 'jpg'"},
-        BadCase{"UnknownBackend", "render {dir}/map.ply --out {dir}/o --backend metal", "--backend"}),
+        BadCase{"UnknownBackend", "render {dir}/map.ply --out {dir}/o --backend metal", "--backend"},
+        BadCase{"VulkanDeviceOutOfRange", "render {dir}/map.ply --out {dir}/o --backend vulkan --device 99",
+                "error: vulkan:"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
