@@ -20,43 +20,30 @@ SlamConfig::SlamConfig() {
   mapping.seed.scale_factor = 0.6;
 }
 
-SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
-    : rasterizer_(rasterizer), config_(config), mapper_(rasterizer, config.mapping) {}
+FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
+    : rasterizer_(rasterizer), config_(config) {}
 
-bool SlamSystem::is_keyframe(const Eigen::Isometry3d& T_world_cam) const {
-  const Eigen::Isometry3d motion = last_keyframe_.inverse() * T_world_cam;
-  const double degrees = Eigen::AngleAxisd(motion.linear()).angle() * 180 / M_PI;
-  return since_keyframe_ >= config_.keyframe_every || motion.translation().norm() > config_.keyframe_translation ||
-         degrees > config_.keyframe_rotation_deg;
+void FrameTracker::start() {
+  last_poses_ = {Eigen::Isometry3d::Identity()};
+  last_keyframe_ = Eigen::Isometry3d::Identity();
+  since_keyframe_ = 0;
 }
 
-FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
+FrameRecord FrameTracker::track(const splat::Gaussians& map, const splat::RgbdFrame& frame) {
   FrameRecord record;
   record.timestamp = frame.timestamp;
-  if (poses_.empty()) {
-    // The first frame defines the world frame and seeds the map.
-    const auto start = std::chrono::steady_clock::now();
-    mapper_.add_keyframe(frame, Eigen::Isometry3d::Identity());
-    record.mapping_ms = ms_since(start);
-    record.keyframe = true;
-    ++keyframes_;
-    poses_.push_back(Eigen::Isometry3d::Identity());
-    record.gaussians = mapper_.map().size();
-    return record;
-  }
   // Constant velocity: apply the last inter-frame motion again.
-  Eigen::Isometry3d guess = poses_.back();
-  if (poses_.size() >= 2) {
-    guess = splat::orthonormalized(poses_.back() * (poses_[poses_.size() - 2].inverse() * poses_.back()));
-  }
+  const Eigen::Isometry3d& last = last_poses_.back();
+  Eigen::Isometry3d guess = last;
+  if (last_poses_.size() >= 2) guess = splat::orthonormalized(last * (last_poses_.front().inverse() * last));
   const auto start = std::chrono::steady_clock::now();
-  tracking::TrackingResult result = tracking::track_frame(rasterizer_, mapper_.map(), frame, guess.inverse(), config_.tracking);
+  tracking::TrackingResult result = tracking::track_frame(rasterizer_, map, frame, guess.inverse(), config_.tracking);
   record.renders = result.renders;
   if (!result.converged) {
     // Retry from the last pose with the first-order warm-up, which has a wider basin.
     tracking::TrackingConfig retry = config_.tracking;
     retry.warmup_iterations = 20;
-    const tracking::TrackingResult second = tracking::track_frame(rasterizer_, mapper_.map(), frame, poses_.back().inverse(), retry);
+    const tracking::TrackingResult second = tracking::track_frame(rasterizer_, map, frame, last.inverse(), retry);
     record.retried = true;
     record.renders += second.renders;
     if (second.converged || second.final_cost < result.final_cost) result = second;
@@ -65,15 +52,48 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   record.tracked = result.converged;
   record.reason = result.reason;
   record.T_world_cam = result.T_cam_world.inverse();
-  poses_.push_back(record.T_world_cam);
+  last_poses_ = {last, record.T_world_cam};
   ++since_keyframe_;
-  if (record.tracked && is_keyframe(record.T_world_cam)) {
+  return record;
+}
+
+bool FrameTracker::wants_keyframe(const FrameRecord& record) const {
+  if (!record.tracked) return false;
+  const Eigen::Isometry3d motion = last_keyframe_.inverse() * record.T_world_cam;
+  const double degrees = Eigen::AngleAxisd(motion.linear()).angle() * 180 / M_PI;
+  return since_keyframe_ >= config_.keyframe_every || motion.translation().norm() > config_.keyframe_translation ||
+         degrees > config_.keyframe_rotation_deg;
+}
+
+void FrameTracker::keyframe_added(const Eigen::Isometry3d& T_world_cam) {
+  last_keyframe_ = T_world_cam;
+  since_keyframe_ = 0;
+}
+
+SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
+    : tracker_(rasterizer, config), mapper_(rasterizer, config.mapping) {}
+
+FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
+  if (!tracker_.started()) {
+    // The first frame defines the world frame and seeds the map.
+    FrameRecord record;
+    record.timestamp = frame.timestamp;
+    const auto start = std::chrono::steady_clock::now();
+    mapper_.add_keyframe(frame, Eigen::Isometry3d::Identity());
+    record.mapping_ms = ms_since(start);
+    record.keyframe = true;
+    ++keyframes_;
+    tracker_.start();
+    record.gaussians = mapper_.map().size();
+    return record;
+  }
+  FrameRecord record = tracker_.track(mapper_.map(), frame);
+  if (tracker_.wants_keyframe(record)) {
     const auto map_start = std::chrono::steady_clock::now();
-    mapper_.add_keyframe(frame, result.T_cam_world);
+    mapper_.add_keyframe(frame, record.T_world_cam.inverse());
     record.mapping_ms = ms_since(map_start);
     record.keyframe = true;
-    last_keyframe_ = record.T_world_cam;
-    since_keyframe_ = 0;
+    tracker_.keyframe_added(record.T_world_cam);
     ++keyframes_;
   }
   record.gaussians = mapper_.map().size();

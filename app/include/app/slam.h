@@ -34,10 +34,33 @@ struct FrameRecord {
   std::size_t gaussians = 0;
 };
 
-// RGB-D SLAM on one sequence, frame by frame: track against the map (constant-velocity start,
-// one retry with the first-order warm-up on failure), then on keyframes extend and refine the
-// map. Frames whose tracking failed keep their best pose, are reported, and never become
-// keyframes, so a bad pose does not corrupt the map.
+// The tracking half of SLAM: poses of the frames so far, each new one tracked against a map from
+// the constant-velocity guess, retried once from the last pose with the first-order warm-up on
+// failure. Failed frames keep their best pose and are reported. Shared by the offline
+// SlamSystem and the live pipeline, whose map comes from another thread.
+class FrameTracker {
+ public:
+  FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config);
+  // The first frame defines the world frame.
+  void start();
+  // Fills timestamp, pose, tracked, retried, reason, renders and tracking_ms.
+  FrameRecord track(const splat::Gaussians& map, const splat::RgbdFrame& frame);
+  // Whether a tracked frame at this pose should become a keyframe; keyframe_added() resets.
+  bool wants_keyframe(const FrameRecord& record) const;
+  void keyframe_added(const Eigen::Isometry3d& T_world_cam);
+  bool started() const { return !last_poses_.empty(); }
+
+ private:
+  splat::Rasterizer& rasterizer_;
+  SlamConfig config_;
+  std::vector<Eigen::Isometry3d> last_poses_;  // the last two camera-to-world poses
+  Eigen::Isometry3d last_keyframe_ = Eigen::Isometry3d::Identity();
+  int since_keyframe_ = 0;
+};
+
+// RGB-D SLAM on one sequence, frame by frame: track against the map, then on keyframes extend
+// and refine the map. Frames whose tracking failed never become keyframes, so a bad pose does
+// not corrupt the map.
 class SlamSystem {
  public:
   SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config);
@@ -46,14 +69,8 @@ class SlamSystem {
   std::size_t keyframes_added() const { return keyframes_; }
 
  private:
-  bool is_keyframe(const Eigen::Isometry3d& T_world_cam) const;
-
-  splat::Rasterizer& rasterizer_;
-  SlamConfig config_;
+  FrameTracker tracker_;
   mapping::Mapper mapper_;
-  std::vector<Eigen::Isometry3d> poses_;  // camera to world, one per processed frame
-  Eigen::Isometry3d last_keyframe_ = Eigen::Isometry3d::Identity();
-  int since_keyframe_ = 0;
   std::size_t keyframes_ = 0;
 };
 

@@ -1,0 +1,50 @@
+#include "app/slam_config_io.h"
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "splat/error.h"
+
+namespace app {
+
+SlamConfig load_slam_config(const std::filesystem::path& path) {
+  SlamConfig c;
+  if (path.empty()) return c;
+  std::ifstream in(path);
+  if (!in) throw splat::Error(path.string() + ": cannot open file");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+    auto get = [](const nlohmann::json& obj, const char* key, auto& value) {
+      if (obj.contains(key)) value = obj.at(key).get<std::decay_t<decltype(value)>>();
+    };
+    get(j, "keyframe_every", c.keyframe_every);
+    get(j, "keyframe_translation", c.keyframe_translation);
+    get(j, "keyframe_rotation_deg", c.keyframe_rotation_deg);
+    if (j.contains("tracking")) {
+      const auto& t = j.at("tracking");
+      get(t, "pyramid", c.tracking.pyramid);
+      get(t, "iterations", c.tracking.iterations);
+      get(t, "depth_sigma", c.tracking.depth_sigma);
+      get(t, "color_sigma", c.tracking.color_sigma);
+      get(t, "color_weight", c.tracking.color_weight);
+      get(t, "alpha_threshold", c.tracking.alpha_threshold);
+    }
+    if (j.contains("mapping")) {
+      const auto& m = j.at("mapping");
+      get(m, "iterations", c.mapping.iterations);
+      get(m, "window", c.mapping.window);
+      get(m, "resolution_factor", c.mapping.resolution_factor);
+      get(m, "seed_stride", c.mapping.seed.stride);
+      get(m, "isotropic", c.mapping.isotropic);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw splat::Error(path.string() + ": " + e.what());
+  }
+  c.tracking.validate();
+  c.mapping.validate();
+  return c;
+}
+
+}  // namespace app
