@@ -34,3 +34,15 @@ if(GSLAM_ENABLE_VULKAN)
                     "mesa-vulkan-drivers to build it")
   endif()
 endif()
+
+# The `gslam live` window: GLFW (libglfw3-dev) and OpenGL (libgl-dev). Without them live mode
+# runs --headless only, with a warning.
+set(OpenGL_GL_PREFERENCE GLVND)
+find_package(glfw3 QUIET)
+find_package(OpenGL QUIET)
+if(glfw3_FOUND AND OpenGL_FOUND)
+  set(GSLAM_HAVE_VIEWER ON)
+else()
+  set(GSLAM_HAVE_VIEWER OFF)
+  message(WARNING "gslam live viewer disabled: apt-get install libglfw3-dev libgl-dev to build it")
+endif()

@@ -6,6 +6,7 @@ packages=(
   libeigen3-dev libglm-dev libpng-dev libjpeg-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
   libcli11-dev libgtest-dev libbenchmark-dev
   libvulkan-dev glslang-tools mesa-vulkan-drivers
+  libglfw3-dev libgl-dev libgl1-mesa-dri xvfb xauth
 )
 missing=()
 for p in "${packages[@]}"; do

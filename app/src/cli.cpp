@@ -5,6 +5,7 @@
 #include "splat/error.h"
 
 #include "app/eval_command.h"
+#include "app/live_command.h"
 #include "app/reconstruct_command.h"
 #include "app/render_command.h"
 
@@ -59,6 +60,23 @@ int run_cli(int argc, char** argv) {
   eval_cmd->add_option("--every", eval.every, "Measure rendering quality on every N-th frame")->capture_default_str();
   add_backend_options(*eval_cmd, eval.backend);
 
+  LiveOptions live;
+  CLI::App* live_cmd = cli.add_subcommand("live", "Live SLAM on frames as they arrive, with a viewer window");
+  live_cmd->add_option("source", live.source, "Dataset folder to replay at its recorded rate, or with --watch the folder a camera driver writes")->required();
+  live_cmd->add_option("--out", live.out, "Output directory")->required();
+  live_cmd->add_flag("--watch", live.watch, "Take frames written into SOURCE/rgb and SOURCE/depth as they appear");
+  live_cmd->add_flag("--headless", live.headless, "No window (robots without a display)");
+  live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")->capture_default_str();
+  live_cmd->add_option("--max-frames", live.dataset_options.max_frames, "Stop after tracking N frames");
+  live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
+  live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  live_cmd->add_option("--idle-timeout", live.watch_options.idle_timeout, "--watch: seconds without frames that end the stream")->capture_default_str();
+  live_cmd->add_option("--checkpoint-seconds", live.checkpoint_seconds, "Rewrite the outputs this often")->capture_default_str();
+  live_cmd->add_option("--config", live.config, "JSON file with SLAM settings");
+  live_cmd->add_option("--screenshot", live.screenshot, "Save the window to this PNG once --screenshot-after frames are tracked");
+  live_cmd->add_option("--screenshot-after", live.screenshot_after, "Frames tracked before --screenshot");
+  add_backend_options(*live_cmd, live.backend);
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -70,6 +88,12 @@ int run_cli(int argc, char** argv) {
     return run_reconstruct(recon);
   }
   if (eval_cmd->parsed()) return run_eval(eval);
+  if (live_cmd->parsed()) {
+    if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
+    if (!live.dataset_options.intrinsics.empty()) live.watch_options.intrinsics = live.dataset_options.intrinsics;
+    if (live.dataset_options.depth_scale > 0) live.watch_options.depth_scale = live.dataset_options.depth_scale;
+    return run_live(live);
+  }
   return 2;
 }
 

@@ -219,6 +219,13 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
   return f;
 }
 
+splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb) {
+  splat::Camera cam;
+  apply_intrinsics(cam, intrinsics);
+  set_size_from(cam, rgb);
+  return cam;
+}
+
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options) {
   if (!std::filesystem::is_directory(root)) fail(root, "dataset folder does not exist");
   Dataset d;

@@ -109,8 +109,12 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes, spla
     }
   }
   if (!truth.empty()) {
-    errors_ = evaluate_trajectory(trajectory_, truth);
-    has_errors_ = true;
+    try {
+      errors_ = evaluate_trajectory(trajectory_, truth);
+      has_errors_ = true;
+    } catch (const splat::Error& e) {  // too few frames to align (a short live run): no ATE
+      extra_["ate_unavailable"] = e.what();
+    }
   }
   write_json(out_ / "summary.json", summary(map, keyframes, true));
 }

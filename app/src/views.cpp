@@ -72,6 +72,17 @@ splat::Camera make_camera(const Intrinsics& k, const Eigen::Isometry3d& T_world_
   return c;
 }
 
+Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up) {
+  // OpenCV camera: z looks at the target, y points down (against `up`), x = y cross z.
+  const Eigen::Vector3d z = (target - eye).normalized();
+  const Eigen::Vector3d x = (-up).cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  T_world_cam.linear() << x, y, z;
+  T_world_cam.translation() = eye;
+  return T_world_cam;
+}
+
 std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
                                          const Eigen::Vector3d& up_in) {
   if (n < 1) throw splat::Error("orbit: view count is " + std::to_string(n) + ", expected at least 1");
@@ -89,14 +100,7 @@ std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int wid
     const Eigen::Vector3d dir = std::cos(elevation) * (std::cos(angle) * a + std::sin(angle) * b) +
                                 std::sin(elevation) * up;
     const Eigen::Vector3d eye = extent.center + distance * dir;
-    // OpenCV camera: z looks at the centre, y points down (against `up`), x = y cross z.
-    const Eigen::Vector3d z = (extent.center - eye).normalized();
-    const Eigen::Vector3d x = (-up).cross(z).normalized();
-    const Eigen::Vector3d y = z.cross(x);
-    Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
-    T_world_cam.linear() << x, y, z;
-    T_world_cam.translation() = eye;
-    splat::Camera cam = make_camera(k, T_world_cam);
+    splat::Camera cam = make_camera(k, look_at(eye, extent.center, up));
     cam.near = std::max(1e-4, 0.01 * extent.radius);
     cams.push_back(cam);
   }

@@ -7,27 +7,14 @@
 
 #include "app/image_io.h"
 #include "app/ply_io.h"
+#include "app/run_gslam.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
 
 namespace {
 
+using gslam::test::RunResult;
 using gslam::test::TempDir;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-RunResult run_gslam(const std::string& args) {
-  RunResult r;
-  std::FILE* pipe = ::popen((std::string(GSLAM_BINARY) + " " + args + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 splat::Gaussians small_map() {
   gslam::test::SceneOptions o;

@@ -42,6 +42,10 @@ struct Dataset {
 // groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), Replica as used by
 // NICE-SLAM/SplaTAM (results/frame*.jpg|png, results/depth*.png / 6553.5, traj.txt), or the plain
 // folder format (README). An unknown camera without --intrinsics is an error, never a guess.
+// Intrinsics "fx,fy,cx,cy" with the image size of the colour image `rgb`. Throws splat::Error
+// naming the text or the file.
+splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb);
+
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options = {});
 
 // TUM's association: each colour frame paired with the nearest unused depth frame within

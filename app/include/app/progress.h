@@ -5,8 +5,9 @@
 
 namespace app {
 
-// Progress of a long job on stderr: "label i/N, rate unit/s, ETA". Rewrites one line on a
-// terminal; prints about every `log_seconds` otherwise (logs, CI).
+// Progress of a long job on stderr: "label i/N, rate unit/s, ETA" ("label i, rate unit/s" when
+// the total is 0, unknown). Rewrites one line on a terminal; prints about every `log_seconds`
+// otherwise (logs, CI).
 class Progress {
  public:
   Progress(std::string label, std::size_t total, std::string unit, std::FILE* out = stderr);

@@ -2,7 +2,7 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "splat/camera.h"
 #include "splat/gaussians.h"
@@ -30,6 +30,9 @@ std::pair<int, int> parse_size(const std::string& text);
 // normal to `up`, each looking at the centre; fx = fy = 0.8 * width (a ~64 degree view).
 std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
                                          const Eigen::Vector3d& up);
+
+// Camera-to-world pose at `eye` looking at `target`, image y pointing against `up` (OpenCV axes).
+Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up);
 
 // Camera at `T_world_cam` with the given intrinsics.
 splat::Camera make_camera(const Intrinsics& k, const Eigen::Isometry3d& T_world_cam);

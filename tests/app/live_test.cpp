@@ -1,0 +1,162 @@
+// `gslam live`: the picture it composes, headless replay with dropped frames, a watched folder,
+// Ctrl-C, and the real window under Xvfb.
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "app/image_io.h"
+#include "app/live_view.h"
+#include "app/run_gslam.h"
+#include "app/synthetic_sequence.h"
+#include "app/trajectory.h"
+#include "support/random_scene.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using gslam::test::TempDir;
+
+std::filesystem::path synthetic(const TempDir& dir, int frames) {
+  app::SyntheticOptions o;
+  o.frames = frames;
+  app::write_synthetic_sequence(dir / "seq", o);
+  return dir / "seq";
+}
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+// Pixels of the map panel with exactly this colour.
+int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
+  int n = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < app::kMapPanelWidth && x < image.width; ++x) {
+      n += image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
+    }
+  }
+  return n;
+}
+
+// Map panel pixels that differ from the empty panel's dark background (the splats).
+int count_map_pixels(const splat::Image8& image) {
+  int n = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < app::kMapPanelWidth; ++x) n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
+  }
+  return n;
+}
+
+TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
+  gslam::test::SceneOptions o;
+  o.count = 300;
+  o.max_opacity = 0.95;
+  const auto scene = gslam::test::make_random_scene<float>(o);
+  app::LiveViewState state;
+  state.map = std::make_shared<const splat::Gaussians>(scene.gaussians);
+  // The scene's camera, and a short path behind it.
+  state.T_world_cam = scene.camera.T_cam_world.inverse();
+  for (int i = 0; i < 5; ++i) {
+    state.trajectory.push_back(state.T_world_cam * Eigen::Vector3d(0.05 * i - 0.2, 0, 0.02 * i));
+  }
+  state.input = splat::Image8(64, 48, 3, 200);
+  auto rasterizer = splat::make_cpu_rasterizer({1});
+  const splat::Image8 picture = app::compose_live_view(state, {}, *rasterizer);
+  ASSERT_EQ(picture.width, app::kLiveViewWidth);
+  ASSERT_EQ(picture.height, app::kLiveViewHeight);
+  EXPECT_GT(count_map_pixels(picture), 5000) << "the map should fill part of the panel";
+  EXPECT_GT(count_colour(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
+  EXPECT_GT(count_colour(picture, app::kCameraRgb), 20) << "current camera not drawn";
+  EXPECT_EQ(picture.at(app::kMapPanelWidth + 10, 10, 0), 200) << "input frame not shown";
+  app::ViewCamera orbit;
+  orbit.follow = false;
+  EXPECT_GT(count_map_pixels(app::compose_live_view(state, orbit, *rasterizer)), 1000) << "orbit view";
+}
+
+TEST(CliLive, HeadlessReplayWritesReconstructOutputsAndCountsDroppedFrames) {
+  TempDir dir;
+  const auto seq = synthetic(dir, 20);
+  // 20 frames at 30 Hz replayed 4x faster than recorded: far more than this machine tracks.
+  const auto r = run_gslam("live " + seq.string() + " --out " + (dir / "run").string() + " --headless --speed 4");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name : {"trajectory.txt", "map.ply", "map.glb", "summary.json", "keyframes/kf_0000.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
+  }
+  const nlohmann::json s = read_json(dir / "run" / "summary.json");
+  const auto& live = s.at("live");
+  const std::size_t frames = s.at("frames").get<std::size_t>();
+  EXPECT_TRUE(s.at("complete").get<bool>());
+  EXPECT_EQ(live.at("frames_received").get<std::size_t>(), 20u);
+  EXPECT_EQ(frames + live.at("frames_dropped").get<std::size_t>(), 20u) << "every frame is tracked or dropped";
+  EXPECT_GT(live.at("frames_dropped").get<std::size_t>(), 0u) << "replay faster than tracking must drop";
+  EXPECT_GE(frames, 2u);
+  EXPECT_GT(live.at("tracking_latency_ms").at("p95").get<double>(), 0);
+  if (s.contains("ate_rmse_m")) {
+    EXPECT_LT(s.at("ate_rmse_m").get<double>(), 0.02);
+  }
+  EXPECT_EQ(app::read_tum_trajectory(dir / "run" / "trajectory.txt").size(), frames);
+}
+
+TEST(CliLive, WatchedFolderTakesPairsAsTheyAppearUntilEnd) {
+  TempDir dir;
+  const auto seq = synthetic(dir, 3);
+  const auto watched = dir / "camera";
+  std::filesystem::create_directories(watched / "rgb");
+  std::filesystem::create_directories(watched / "depth");
+  std::filesystem::copy_file(seq / "intrinsics.txt", watched / "intrinsics.txt");
+  // A driver's output: pairs named by timestamp, then END.
+  int k = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(seq / "rgb")) {
+    const std::string name = "1000." + std::to_string(k++) + ".png";
+    std::filesystem::copy_file(entry.path(), watched / "rgb" / name);
+    std::filesystem::copy_file(seq / "depth" / entry.path().filename(), watched / "depth" / name);
+  }
+  std::ofstream(watched / "END") << "\n";
+  const auto r = run_gslam("live " + watched.string() + " --watch --out " + (dir / "run").string() + " --headless");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "run" / "summary.json");
+  EXPECT_GE(s.at("frames").get<std::size_t>(), 1u);
+  EXPECT_EQ(s.at("frames").get<std::size_t>() + s.at("live").at("frames_dropped").get<std::size_t>(), 3u);
+  const auto missing = run_gslam("live " + (dir / "nowhere").string() + " --watch --out " + (dir / "x").string() + " --headless");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("watched folder does not exist"), std::string::npos) << missing.output;
+}
+
+TEST(CliLive, CtrlCWritesCompleteOutputs) {
+  if (!gslam::test::program_available("timeout")) GTEST_SKIP() << "coreutils timeout not found";
+  TempDir dir;
+  const auto seq = synthetic(dir, 30);
+  // Replayed at a tenth of its rate, the run is still going when SIGINT arrives after 4 s.
+  const auto r = gslam::test::run_command("timeout --preserve-status -s INT 4 " + std::string(GSLAM_BINARY) + " live " +
+                                          seq.string() + " --out " + (dir / "run").string() + " --headless --speed 0.1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json s = read_json(dir / "run" / "summary.json");
+  EXPECT_TRUE(s.at("complete").get<bool>());
+  EXPECT_TRUE(s.at("live").at("interrupted").get<bool>());
+  EXPECT_LT(s.at("frames").get<std::size_t>(), 30u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "map.ply"));
+}
+
+// The real window, drawn by Mesa's software OpenGL under Xvfb: its screenshot shows the map,
+// the yellow trajectory, the red current camera and the input frame.
+TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
+  if (!gslam::test::program_available("xvfb-run")) GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
+  TempDir dir;
+  const auto seq = synthetic(dir, 12);
+  const auto shot = dir / "shot.png";
+  const auto r = gslam::test::run_command("xvfb-run -a -s '-screen 0 1280x1024x24' " + std::string(GSLAM_BINARY) +
+                                          " live " + seq.string() + " --out " + (dir / "run").string() +
+                                          " --speed 0.25 --screenshot " + shot.string() + " --screenshot-after 4");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(std::filesystem::exists(shot)) << r.output;
+  const splat::Image8 picture = app::read_png_rgb8(shot);
+  ASSERT_EQ(picture.width, app::kLiveViewWidth);
+  EXPECT_GT(count_map_pixels(picture), 20000) << "map not drawn";
+  EXPECT_GT(count_colour(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
+  EXPECT_GT(count_colour(picture, app::kCameraRgb), 20) << "camera not drawn";
+  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "summary.json"));
+}
+
+}  // namespace
