@@ -69,12 +69,10 @@ struct Shared {
 int run_live(const LiveOptions& o) {
   if (!(o.checkpoint_seconds > 0)) throw splat::Error("--checkpoint-seconds must be > 0");
   const SlamConfig config = load_slam_config(o.config);
-  std::unique_ptr<FrameSource> source;
-  if (o.watch) {
-    source = make_watch_source(o.source, o.watch_options);
-  } else {
-    source = make_replay_source(open_dataset(o.source, o.dataset_options), o.speed);
-  }
+  // The dataset is opened (and checked) first; the replay clock starts once everything else is
+  // ready, so start-up time does not count as dropped frames.
+  std::optional<Dataset> dataset;
+  if (!o.watch) dataset = open_dataset(o.source, o.dataset_options);
   std::string note;
   auto tracking_rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
@@ -82,9 +80,10 @@ int run_live(const LiveOptions& o) {
   std::unique_ptr<ViewerWindow> window;
   if (!o.headless) window = std::make_unique<ViewerWindow>("gslam live");
   auto view_rasterizer = splat::make_cpu_rasterizer({1});
-  std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
-
   LiveSlam live(*tracking_rasterizer, *mapping_rasterizer, config);
+  std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, o.watch_options)
+                                                : make_replay_source(std::move(*dataset), o.speed);
+  std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
   RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer);
   Shared shared;
   LatencyWindow latency;

@@ -41,7 +41,7 @@ FrameRecord LiveSlam::process(const splat::RgbdFrame& frame) {
     mapper_.add_keyframe(frame, Eigen::Isometry3d::Identity());
     record.mapping_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     record.keyframe = true;
-    tracker_.start();
+    tracker_.start(frame.timestamp);
     publish();
     {
       std::lock_guard lock(mutex_);

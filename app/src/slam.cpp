@@ -23,8 +23,9 @@ SlamConfig::SlamConfig() {
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
     : rasterizer_(rasterizer), config_(config) {}
 
-void FrameTracker::start() {
+void FrameTracker::start(double timestamp) {
   last_poses_ = {Eigen::Isometry3d::Identity()};
+  last_times_ = {timestamp};
   last_keyframe_ = Eigen::Isometry3d::Identity();
   since_keyframe_ = 0;
 }
@@ -32,10 +33,16 @@ void FrameTracker::start() {
 FrameRecord FrameTracker::track(const splat::Gaussians& map, const splat::RgbdFrame& frame) {
   FrameRecord record;
   record.timestamp = frame.timestamp;
-  // Constant velocity: apply the last inter-frame motion again.
-  const Eigen::Isometry3d& last = last_poses_.back();
+  // Constant velocity: the last inter-frame motion, scaled to this frame's time step (equal
+  // steps when the timestamps do not say otherwise).
+  const Eigen::Isometry3d last = last_poses_.back();
   Eigen::Isometry3d guess = last;
-  if (last_poses_.size() >= 2) guess = splat::orthonormalized(last * (last_poses_.front().inverse() * last));
+  if (last_poses_.size() >= 2) {
+    const double step = last_times_.back() - last_times_.front(), now = frame.timestamp - last_times_.back();
+    const double scale = step > 0 && now > 0 ? std::min(now / step, 10.0) : 1.0;
+    const Eigen::Isometry3d motion = last_poses_.front().inverse() * last;
+    guess = splat::orthonormalized(last * (scale == 1.0 ? motion : splat::se3_exp(scale * splat::se3_log(motion))));
+  }
   const auto start = std::chrono::steady_clock::now();
   tracking::TrackingResult result = tracking::track_frame(rasterizer_, map, frame, guess.inverse(), config_.tracking);
   record.renders = result.renders;
@@ -53,6 +60,7 @@ FrameRecord FrameTracker::track(const splat::Gaussians& map, const splat::RgbdFr
   record.reason = result.reason;
   record.T_world_cam = result.T_cam_world.inverse();
   last_poses_ = {last, record.T_world_cam};
+  last_times_ = {last_times_.back(), frame.timestamp};
   ++since_keyframe_;
   return record;
 }
@@ -83,7 +91,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
     record.mapping_ms = ms_since(start);
     record.keyframe = true;
     ++keyframes_;
-    tracker_.start();
+    tracker_.start(frame.timestamp);
     record.gaussians = mapper_.map().size();
     return record;
   }

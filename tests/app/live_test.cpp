@@ -77,9 +77,9 @@ TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
 
 TEST(CliLive, HeadlessReplayWritesReconstructOutputsAndCountsDroppedFrames) {
   TempDir dir;
-  const auto seq = synthetic(dir, 20);
-  // 20 frames at 30 Hz replayed 4x faster than recorded: far more than this machine tracks.
-  const auto r = run_gslam("live " + seq.string() + " --out " + (dir / "run").string() + " --headless --speed 4");
+  const auto seq = synthetic(dir, 40);
+  // 40 frames at 30 Hz (1.3 s): more than a CPU tracks at that rate, so some are dropped.
+  const auto r = run_gslam("live " + seq.string() + " --out " + (dir / "run").string() + " --headless");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* name : {"trajectory.txt", "map.ply", "map.glb", "summary.json", "keyframes/kf_0000.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
@@ -88,14 +88,11 @@ TEST(CliLive, HeadlessReplayWritesReconstructOutputsAndCountsDroppedFrames) {
   const auto& live = s.at("live");
   const std::size_t frames = s.at("frames").get<std::size_t>();
   EXPECT_TRUE(s.at("complete").get<bool>());
-  EXPECT_EQ(live.at("frames_received").get<std::size_t>(), 20u);
-  EXPECT_EQ(frames + live.at("frames_dropped").get<std::size_t>(), 20u) << "every frame is tracked or dropped";
+  EXPECT_EQ(live.at("frames_received").get<std::size_t>(), 40u);
+  EXPECT_EQ(frames + live.at("frames_dropped").get<std::size_t>(), 40u) << "every frame is tracked or dropped";
   EXPECT_GT(live.at("frames_dropped").get<std::size_t>(), 0u) << "replay faster than tracking must drop";
   EXPECT_GE(frames, 2u);
   EXPECT_GT(live.at("tracking_latency_ms").at("p95").get<double>(), 0);
-  if (s.contains("ate_rmse_m")) {
-    EXPECT_LT(s.at("ate_rmse_m").get<double>(), 0.02);
-  }
   EXPECT_EQ(app::read_tum_trajectory(dir / "run" / "trajectory.txt").size(), frames);
 }
 

@@ -34,15 +34,15 @@ struct FrameRecord {
   std::size_t gaussians = 0;
 };
 
-// The tracking half of SLAM: poses of the frames so far, each new one tracked against a map from
-// the constant-velocity guess, retried once from the last pose with the first-order warm-up on
+// The tracking half of SLAM: each new frame tracked against a map from the constant-velocity
+// guess (the last motion scaled to the time since the last frame, so dropped frames are bridged), retried once from the last pose with the first-order warm-up on
 // failure. Failed frames keep their best pose and are reported. Shared by the offline
 // SlamSystem and the live pipeline, whose map comes from another thread.
 class FrameTracker {
  public:
   FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config);
-  // The first frame defines the world frame.
-  void start();
+  // The first frame (at `timestamp`) defines the world frame.
+  void start(double timestamp);
   // Fills timestamp, pose, tracked, retried, reason, renders and tracking_ms.
   FrameRecord track(const splat::Gaussians& map, const splat::RgbdFrame& frame);
   // Whether a tracked frame at this pose should become a keyframe; keyframe_added() resets.
@@ -54,6 +54,7 @@ class FrameTracker {
   splat::Rasterizer& rasterizer_;
   SlamConfig config_;
   std::vector<Eigen::Isometry3d> last_poses_;  // the last two camera-to-world poses
+  std::vector<double> last_times_;             // and their timestamps
   Eigen::Isometry3d last_keyframe_ = Eigen::Isometry3d::Identity();
   int since_keyframe_ = 0;
 };
