@@ -3,12 +3,12 @@
 
 #include "cpu/math.h"
 #include "cpu/stages.h"
+#include "render_stats.h"
 #include "shader_io.h"
 
 namespace splat::cpu {
 namespace {
 
-enum class Cull : uint8_t { kNone, kDepth, kDegenerate, kFaint, kOffscreen };
 
 // Camera extrinsics and intrinsics in the working scalar type.
 template <typename T>
@@ -57,7 +57,7 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
   frame.radii.assign(n * 2, 0);
   frame.colors.assign(n * 3, 0);
   frame.opacities.assign(n, 0);
-  std::vector<Cull> cull(n, Cull::kNone);
+  std::vector<uint32_t> cull(n, io::kCullNone);
 
   constexpr std::size_t kChunk = 1024;
   pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
@@ -82,13 +82,13 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
       }
 
       if (p.z < T(frame.camera.near) || p.z > T(frame.camera.far)) {
-        cull[i] = Cull::kDepth;
+        cull[i] = io::kCullDepth;
         continue;
       }
       const Vec4<T> q = load4(g.rotations, i);
       const T q_len = glm::length(q);
       if (!(q_len > 0)) {
-        cull[i] = Cull::kDegenerate;
+        cull[i] = io::kCullDegenerate;
         continue;
       }
       // EWA: Sigma_cam = W Sigma W^T, cov2d = J Sigma_cam J^T + dilation.
@@ -99,11 +99,11 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
       cov2d[1][1] += T(io::kCov2dDilation);
       Vec3<T> conic;
       if (!invert_sym2(cov2d, conic)) {
-        cull[i] = Cull::kDegenerate;
+        cull[i] = io::kCullDegenerate;
         continue;
       }
       if (opacity < T(io::kAlphaMin)) {
-        cull[i] = Cull::kFaint;
+        cull[i] = io::kCullFaint;
         continue;
       }
       // Extent: where opacity * exp(-r^2/2) falls to kAlphaMin, at most kExtentSigmaMax sigma.
@@ -115,7 +115,7 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
       if ((radius_x <= 0 && radius_y <= 0) || mean2d.x + radius_x <= 0 ||
           mean2d.x - radius_x >= T(width) || mean2d.y + radius_y <= 0 ||
           mean2d.y - radius_y >= T(height)) {
-        cull[i] = Cull::kOffscreen;
+        cull[i] = io::kCullOffscreen;
         continue;
       }
       frame.means2d[i * 2] = mean2d.x;
@@ -126,17 +126,7 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
     }
   });
 
-  RenderStats& stats = frame.stats;
-  stats = {};
-  for (Cull c : cull) {
-    switch (c) {
-      case Cull::kNone: ++stats.visible; break;
-      case Cull::kDepth: ++stats.culled_depth; break;
-      case Cull::kDegenerate: ++stats.culled_degenerate; break;
-      case Cull::kFaint: ++stats.culled_faint; break;
-      case Cull::kOffscreen: ++stats.culled_offscreen; break;
-    }
-  }
+  frame.stats = tally_cull_reasons(cull);
 }
 
 template <typename T>

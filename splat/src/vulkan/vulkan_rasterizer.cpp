@@ -21,6 +21,7 @@
 #include "tiles_count_spv.h"
 #include "tiles_emit_spv.h"
 #include "tiles_finish_spv.h"
+#include "render_stats.h"
 #include "vulkan/device_sort.h"
 
 namespace splat::vk {
@@ -385,18 +386,8 @@ class VulkanRasterizer final : public Rasterizer {
     download_into(batch_, s.cull, cull, n);
     batch_.run();
 
-    RenderStats& stats = f.stats;
-    stats = {};
-    for (uint32_t c : cull) {
-      switch (c) {
-        case io::kCullNone: ++stats.visible; break;
-        case io::kCullDepth: ++stats.culled_depth; break;
-        case io::kCullDegenerate: ++stats.culled_degenerate; break;
-        case io::kCullFaint: ++stats.culled_faint; break;
-        default: ++stats.culled_offscreen; break;
-      }
-    }
-    stats.intersections = m;
+    f.stats = tally_cull_reasons(cull);
+    f.stats.intersections = m;
   }
 
   std::shared_ptr<Context> context_;
