@@ -25,7 +25,7 @@ std::size_t Mapper::densify(const Keyframe& kf) {
   const splat::RgbdFrame& f = kf.frame;
   std::vector<float> mask(f.depth.size(), 1.f);
   if (!map_.empty()) {
-    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), {});
+    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
     std::vector<float> errors;
     for (std::size_t p = 0; p < f.depth.size(); ++p) {
       if (f.depth[p] > 0 && render.alpha[p] > config_.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));
@@ -70,7 +70,7 @@ std::vector<const Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) 
 
 double Mapper::optimize_step(const Keyframe& kf) {
   const splat::RgbdFrame& f = kf.frame;
-  const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), {});
+  const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
   splat::ImageGrads d;
   d.rgb.assign(render.rgb.size(), 0.f);
   d.depth.assign(render.depth.size(), 0.f);

@@ -21,6 +21,7 @@ struct ParityCase {
   const char* name;
   SceneOptions scene;
 };
+void PrintTo(const ParityCase& c, std::ostream* os) { *os << c.name; }
 
 SceneOptions scene(uint32_t seed, int count, int degree, int width, int height, double max_opacity) {
   SceneOptions o;
@@ -127,6 +128,21 @@ TEST(VulkanBackend, BackwardAcceptsAForwardResultFromAnotherBackend) {
   const auto a = cpu.forward(s.gaussians, s.camera, {});
   const splat::ImageGrads d = random_image_grads(a, 11);
   gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(a, d), "cpu forward");
+}
+
+// Without intermediates the images are the same, the per-Gaussian buffers stay on the device,
+// and backward still matches.
+TEST(VulkanBackend, ImagesOnlyForwardSkipsIntermediatesAndBackwardStillMatches) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  const auto s = gslam::test::make_random_scene<float>(scene(10, 500, 2, 96, 64, 0.9));
+  const auto a = cpu.forward(s.gaussians, s.camera, {});
+  const auto b = gpu.forward(s.gaussians, s.camera, splat::images_only());
+  EXPECT_TRUE(b.means2d.empty());
+  EXPECT_TRUE(b.sorted_ids.empty());
+  gslam::test::expect_forward_parity(a, b, false, "images only");
+  const splat::ImageGrads d = random_image_grads(a, 13);
+  gslam::test::expect_backward_parity(cpu.backward(a, d), gpu.backward(b, d), "images only");
 }
 
 // Buffers grow with the map and are reused across frames: small, large, small again.

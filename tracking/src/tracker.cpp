@@ -105,7 +105,7 @@ void warm_up(splat::Rasterizer& rasterizer, const splat::GaussiansView& map, con
   double m[6] = {}, v[6] = {}, best = INFINITY;
   Eigen::Isometry3d best_pose = result.T_cam_world;
   for (int it = 0; it < config.warmup_iterations; ++it) {
-    const splat::ForwardResult render = rasterizer.forward(map, splat::posed(frame.camera, result.T_cam_world), {});
+    const splat::ForwardResult render = rasterizer.forward(map, splat::posed(frame.camera, result.T_cam_world), splat::images_only());
     ++result.renders;
     const std::vector<float> jacobian = rasterizer.pose_jacobian(render);
     const Linearization lin = linearize(render, &jacobian, frame, config);
@@ -147,7 +147,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
     const splat::RgbdFrame scaled = splat::downsample(frame, config.pyramid[level]);
     auto render_at = [&](const Eigen::Isometry3d& pose) {
       ++result.renders;
-      return rasterizer.forward(map, splat::posed(scaled.camera, pose), {});
+      return rasterizer.forward(map, splat::posed(scaled.camera, pose), splat::images_only());
     };
     if (level == 0) warm_up(rasterizer, map, scaled, config, result);
     splat::ForwardResult render = render_at(result.T_cam_world);

@@ -20,7 +20,18 @@ struct RenderSettings {
   // the means and the pose. This is the exact derivative. false treats the direction as a
   // constant, as gsplat's rasterization() does (its golden gradients are made that way).
   bool sh_direction_gradient = true;
+  // Fill ForwardResult's per-Gaussian and per-tile buffers (means2d .. final_transmittance).
+  // false lets a backend leave them empty: the Vulkan backend then skips copying them to the
+  // host, which at 1M Gaussians costs more than rendering. Backward works either way.
+  bool intermediates = true;
 };
+
+// Settings for loops that only use the images (tracking, mapping): no intermediates.
+inline RenderSettings images_only() {
+  RenderSettings s;
+  s.intermediates = false;
+  return s;
+}
 
 // Counts of what the projection stage did, for logs and tests.
 struct RenderStats {

@@ -372,16 +372,18 @@ class VulkanRasterizer final : public Rasterizer {
     download_into(batch_, s.alpha, f.alpha, pixels);
     download_into(batch_, s.depth, f.depth, pixels);
     download_into(batch_, s.depth_normalized, f.depth_normalized, pixels);
-    download_into(batch_, s.last, f.last_contributor, pixels);
-    download_into(batch_, s.transmittance, f.final_transmittance, pixels);
-    download_into(batch_, s.means2d, f.means2d, n * 2);
-    download_into(batch_, s.conics, f.conics, n * 3);
-    download_into(batch_, s.depths, f.depths, n);
-    download_into(batch_, s.radii, f.radii, n * 2);
-    download_into(batch_, s.colors, f.colors, n * 3);
-    download_into(batch_, s.opacities, f.opacities, n);
-    download_into(batch_, s.tile_ranges, f.tile_ranges, tiles * 2);
-    download_into(batch_, s.sorted_ids, f.sorted_ids, m);
+    if (f.settings.intermediates) {
+      download_into(batch_, s.last, f.last_contributor, pixels);
+      download_into(batch_, s.transmittance, f.final_transmittance, pixels);
+      download_into(batch_, s.means2d, f.means2d, n * 2);
+      download_into(batch_, s.conics, f.conics, n * 3);
+      download_into(batch_, s.depths, f.depths, n);
+      download_into(batch_, s.radii, f.radii, n * 2);
+      download_into(batch_, s.colors, f.colors, n * 3);
+      download_into(batch_, s.opacities, f.opacities, n);
+      download_into(batch_, s.tile_ranges, f.tile_ranges, tiles * 2);
+      download_into(batch_, s.sorted_ids, f.sorted_ids, m);
+    }
     std::vector<uint32_t> cull;
     download_into(batch_, s.cull, cull, n);
     batch_.run();
