@@ -3,6 +3,7 @@
 // Run: build/bench/rasterizer_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -47,6 +48,7 @@ void run(benchmark::State& state, const std::string& backend_name, bool backward
   d_image.depth.assign(pixels, 1e-3f);
   double covered = 0;
   std::size_t intersections = 0;
+  rasterizer->reset_stage_times();
   for (auto _ : state) {
     splat::ForwardResult f = rasterizer->forward(w->gaussians, w->camera, {});
     if (backward) benchmark::DoNotOptimize(rasterizer->backward(f, d_image));
@@ -57,6 +59,13 @@ void run(benchmark::State& state, const std::string& backend_name, bool backward
   }
   state.counters["coverage"] = covered / static_cast<double>(pixels);
   state.counters["isects"] = static_cast<double>(intersections);
+  // Device time per stage and iteration (Vulkan timestamps), the three largest.
+  std::vector<std::pair<double, std::string>> stages;
+  for (const auto& [name, ms] : rasterizer->stage_times_ms()) stages.push_back({ms, name});
+  std::sort(stages.rbegin(), stages.rend());
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, stages.size()); ++k) {
+    state.counters[stages[k].second + "_ms"] = stages[k].first / static_cast<double>(state.iterations());
+  }
   state.SetLabel(rasterizer->name());
 }
 

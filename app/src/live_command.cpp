@@ -180,9 +180,10 @@ int run_live(const LiveOptions& o) {
         done = shared.done;
       }
       if (window->closed() || g_interrupted) shared.stop = true;
-      if (done || shared.stop) break;
-      const bool want_screenshot = !o.screenshot.empty() && !screenshot_taken && o.screenshot_after > 0 &&
-                                   tracked >= static_cast<std::size_t>(o.screenshot_after);
+      const bool last = done || shared.stop;  // draw once more, then leave
+      // The screenshot once enough frames are tracked, or at the end if the stream was shorter.
+      const bool want_screenshot = !o.screenshot.empty() && !screenshot_taken &&
+                                   (tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) || last);
       const bool want_snapshot = window->take_snapshot_request();
       splat::Image8 capture;
       window->show(compose_live_view(state, window->view(), *view_rasterizer), title,
@@ -199,6 +200,7 @@ int run_live(const LiveOptions& o) {
         std::lock_guard lock(shared.mutex);
         shared.snapshot = true;  // the pipeline writes map.ply, trajectory and summary
       }
+      if (last) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(30));
     }
     worker.join();

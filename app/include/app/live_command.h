@@ -19,8 +19,8 @@ struct LiveOptions {
   double checkpoint_seconds = 30;  // outputs rewritten (atomically) this often
   std::filesystem::path config;    // optional SLAM settings (as reconstruct)
   BackendChoice backend;
-  std::filesystem::path screenshot;  // with screenshot_after: save the window once, then go on
-  int screenshot_after = 0;          // frames tracked before that screenshot
+  std::filesystem::path screenshot;  // save the window to this PNG once, then go on
+  int screenshot_after = 1;          // frames tracked before that screenshot (or the end)
 };
 
 // `gslam live`: tracking on every frame it takes from the source, mapping on keyframes in a

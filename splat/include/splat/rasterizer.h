@@ -1,6 +1,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -121,6 +122,10 @@ class Rasterizer {
   virtual std::vector<float> pose_jacobian(const ForwardResult& forward) = 0;
   // Device memory the backend holds now, in bytes (0 for the CPU backend).
   virtual std::size_t device_memory_bytes() const { return 0; }
+  // Device time per stage (shader) since the last reset, in milliseconds, where the backend
+  // can measure it (Vulkan timestamps; empty for the CPU backend). For profiling.
+  virtual std::map<std::string, double> stage_times_ms() const { return {}; }
+  virtual void reset_stage_times() {}
 };
 
 // Throws splat::Error unless every non-empty image gradient has the forward result's size.

@@ -6,6 +6,9 @@
 #include "splat/error.h"
 
 namespace splat::vk {
+namespace {
+constexpr uint32_t kMaxTimestamps = 512;  // per batch; later dispatches go untimed
+}  // namespace
 
 Kernel::Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindings, const char* name)
     : context_(context), bindings_(bindings), name_(name) {
@@ -57,12 +60,19 @@ CommandBatch::CommandBatch(Context& context) : context_(context) {
   vk_check(vkAllocateCommandBuffers(context_.device(), &info, &commands_), "vkAllocateCommandBuffers");
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   vk_check(vkCreateFence(context_.device(), &fence_info, nullptr, &fence_), "vkCreateFence");
+  if (context_.timestamp_period_ns() > 0) {
+    VkQueryPoolCreateInfo query_info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    query_info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    query_info.queryCount = kMaxTimestamps;
+    vk_check(vkCreateQueryPool(context_.device(), &query_info, nullptr, &queries_), "vkCreateQueryPool");
+  }
 }
 
 CommandBatch::~CommandBatch() {
   VkDevice device = context_.device();
   if (recording_) vkEndCommandBuffer(commands_);
   for (VkDescriptorPool pool : pools_) vkDestroyDescriptorPool(device, pool, nullptr);
+  if (queries_) vkDestroyQueryPool(device, queries_, nullptr);
   vkDestroyFence(device, fence_, nullptr);
   vkFreeCommandBuffers(device, context_.command_pool(), 1, &commands_);
 }
@@ -102,6 +112,11 @@ void CommandBatch::begin_recording() {
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   vk_check(vkBeginCommandBuffer(commands_, &begin), "vkBeginCommandBuffer");
   recording_ = true;
+  timed_.clear();
+  if (queries_) {
+    vkCmdResetQueryPool(commands_, queries_, 0, kMaxTimestamps);
+    vkCmdWriteTimestamp(commands_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
+  }
 }
 
 void CommandBatch::barrier() {
@@ -145,6 +160,11 @@ void CommandBatch::dispatch(const Kernel& kernel, std::initializer_list<const Bu
   vkCmdPushConstants(commands_, kernel.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, Kernel::kPushBytes, values);
   vkCmdDispatch(commands_, groups_x, groups_y, 1);
   barrier();
+  if (queries_ && timed_.size() + 1 < kMaxTimestamps) {
+    timed_.push_back(kernel.name());
+    vkCmdWriteTimestamp(commands_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries_,
+                        static_cast<uint32_t>(timed_.size()));
+  }
 }
 
 void CommandBatch::fill_zero(Buffer& buffer, std::size_t bytes) {
@@ -197,6 +217,17 @@ void CommandBatch::run() {
     vk_check(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
     vk_check(vkResetFences(context_.device(), 1, &fence_), "vkResetFences");
     vk_check(vkResetCommandBuffer(commands_, 0), "vkResetCommandBuffer");
+    if (queries_ && !timed_.empty()) {
+      std::vector<uint64_t> ticks(timed_.size() + 1);
+      vk_check(vkGetQueryPoolResults(context_.device(), queries_, 0, static_cast<uint32_t>(ticks.size()),
+                                     ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
+                                     VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+               "vkGetQueryPoolResults");
+      // Each dispatch's time: from the previous timestamp (transfers in between count too).
+      for (std::size_t k = 0; k < timed_.size(); ++k) {
+        kernel_ms_[timed_[k]] += double(ticks[k + 1] - ticks[k]) * context_.timestamp_period_ns() * 1e-6;
+      }
+    }
   }
   for (auto& copy_out : after_run_) copy_out();
   after_run_.clear();

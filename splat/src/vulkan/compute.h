@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
+#include <map>
+#include <string>
 #include <memory>
 #include <span>
 #include <vector>
@@ -58,6 +60,10 @@ class CommandBatch {
   // Buffer to host memory after run(); `data` must stay valid until then.
   void download(const Buffer& buffer, void* data, std::size_t bytes);
   void run();
+  // GPU time per kernel name over the batches run so far (timestamps after each dispatch;
+  // empty if the queue has none), and a reset.
+  const std::map<std::string, double>& kernel_ms() const { return kernel_ms_; }
+  void reset_kernel_ms() { kernel_ms_.clear(); }
 
  private:
   void begin_recording();
@@ -72,6 +78,10 @@ class CommandBatch {
   bool recording_ = false;
   std::vector<std::function<void()>> after_run_;
   std::vector<std::unique_ptr<Buffer>> staging_;  // per batch; released by run()
+  // Timestamps: one at the start of the batch, then one after each dispatch.
+  VkQueryPool queries_ = VK_NULL_HANDLE;
+  std::vector<const char*> timed_;  // kernel name of each timestamp after the first
+  std::map<std::string, double> kernel_ms_;
 };
 
 }  // namespace splat::vk

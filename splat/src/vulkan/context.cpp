@@ -189,6 +189,11 @@ Context::Context(const VulkanOptions& options) {
         break;
       }
     }
+    if (queue_props[family].timestampValidBits > 0) {
+      VkPhysicalDeviceProperties props;
+      vkGetPhysicalDeviceProperties(physical_, &props);
+      timestamp_period_ns_ = props.limits.timestampPeriod;
+    }
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
     queue_info.queueFamilyIndex = family;

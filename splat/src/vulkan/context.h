@@ -30,6 +30,8 @@ class Context {
   VkCommandPool command_pool() const { return command_pool_; }
   const VulkanDeviceInfo& info() const { return info_; }
   bool float_atomics_enabled() const { return float_atomics_; }
+  // Nanoseconds per timestamp tick on the compute queue; 0 if it has no timestamps.
+  double timestamp_period_ns() const { return timestamp_period_ns_; }
   // Index of a memory type allowed by type_bits that has all of `required`, preferring
   // ones that also have `preferred`. Throws if none.
   uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
@@ -51,6 +53,7 @@ class Context {
   VulkanDeviceInfo info_;
   std::atomic<std::size_t> allocated_{0};
   bool float_atomics_ = false;
+  double timestamp_period_ns_ = 0;
 };
 
 // Creates an instance for Vulkan 1.2; throws if the loader or driver is missing.

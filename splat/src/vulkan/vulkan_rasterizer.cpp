@@ -142,6 +142,8 @@ class VulkanRasterizer final : public Rasterizer {
   }
 
   std::size_t device_memory_bytes() const override { return context_->allocated_bytes(); }
+  std::map<std::string, double> stage_times_ms() const override { return batch_.kernel_ms(); }
+  void reset_stage_times() override { batch_.reset_kernel_ms(); }
 
   ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
                         const RenderSettings& settings) override {
