@@ -36,8 +36,8 @@ inline constexpr uint8_t kTrajectoryRgb[3] = {255, 255, 0};
 inline constexpr uint8_t kCameraRgb[3] = {255, 0, 0};
 
 // [kLiveViewHeight, kLiveViewWidth, 3]: the map panel (kMapPanelWidth wide, rendered at half
-// resolution and doubled) with the trajectory and current camera, and the input frame scaled
-// into the top right.
+// resolution and doubled) with the trajectory and current camera, the input frame scaled into
+// the top right, and a top view of the trajectory (world x, z) in the bottom right.
 splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view, splat::Rasterizer& rasterizer);
 
 }  // namespace app
