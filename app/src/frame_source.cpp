@@ -98,7 +98,8 @@ class ThreadedSource : public FrameSource {
   // Sleeps until `deadline` unless stopped; false if stopped.
   bool sleep_until(Clock::time_point deadline) {
     while (!stop_ && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(20)));
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(deadline - Clock::now(), std::chrono::milliseconds(20)));
     }
     return !stop_;
   }
@@ -120,13 +121,15 @@ class ThreadedSource : public FrameSource {
 class ReplaySource final : public ThreadedSource {
  public:
   ReplaySource(Dataset dataset, double speed) : dataset_(std::move(dataset)), speed_(speed) {
-    if (!(speed_ > 0)) throw splat::Error("replay speed " + std::to_string(speed) + ": expected > 0");
+    if (!(speed_ > 0))
+      throw splat::Error("replay speed " + std::to_string(speed) + ": expected > 0");
     start();
   }
   ~ReplaySource() override { stop_and_join(); }
   const splat::Camera& intrinsics() const override { return dataset_.intrinsics; }
   std::string describe() const override {
-    return dataset_.root.string() + " replayed at " + std::to_string(speed_).substr(0, 4) + "x its recorded rate";
+    return dataset_.root.string() + " replayed at " + std::to_string(speed_).substr(0, 4) +
+           "x its recorded rate";
   }
 
  private:
@@ -156,7 +159,8 @@ class ReplaySource final : public ThreadedSource {
 
 class WatchSource final : public ThreadedSource {
  public:
-  WatchSource(std::filesystem::path dir, WatchOptions options) : dir_(std::move(dir)), options_(std::move(options)) {
+  WatchSource(std::filesystem::path dir, WatchOptions options)
+      : dir_(std::move(dir)), options_(std::move(options)) {
     if (!std::filesystem::is_directory(dir_)) fail(dir_, "watched folder does not exist");
     dataset_.format = "watched";
     dataset_.root = dir_;
@@ -165,9 +169,11 @@ class WatchSource final : public ThreadedSource {
       std::ifstream in(dir_ / "intrinsics.txt");
       double fx, fy, cx, cy;
       if (!(in >> fx >> fy >> cx >> cy)) {
-        fail(dir_ / "intrinsics.txt", "missing or malformed (expected 'fx fy cx cy'); or pass --intrinsics");
+        fail(dir_ / "intrinsics.txt",
+             "missing or malformed (expected 'fx fy cx cy'); or pass --intrinsics");
       }
-      options_.intrinsics = std::to_string(fx) + "," + std::to_string(fy) + "," + std::to_string(cx) + "," + std::to_string(cy);
+      options_.intrinsics = std::to_string(fx) + "," + std::to_string(fy) + "," +
+                            std::to_string(cx) + "," + std::to_string(cy);
     }
     start();
   }
@@ -187,7 +193,8 @@ class WatchSource final : public ThreadedSource {
     for (const auto& e : std::filesystem::directory_iterator(dir_ / "rgb", ec)) {
       const auto& p = e.path();
       if (p.extension() != ".png" || p.stem().string() <= last_) continue;
-      if (std::filesystem::exists(dir_ / "depth" / p.filename())) names.push_back(p.stem().string());
+      if (std::filesystem::exists(dir_ / "depth" / p.filename()))
+        names.push_back(p.stem().string());
     }
     std::sort(names.begin(), names.end());
     return names;
@@ -216,7 +223,8 @@ class WatchSource final : public ThreadedSource {
       }
       if (names.empty()) {
         if (std::filesystem::exists(dir_ / "END")) return;
-        if (std::chrono::duration<double>(Clock::now() - last_new).count() > options_.idle_timeout) return;
+        if (std::chrono::duration<double>(Clock::now() - last_new).count() > options_.idle_timeout)
+          return;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }
     }
@@ -225,7 +233,7 @@ class WatchSource final : public ThreadedSource {
   std::filesystem::path dir_;
   WatchOptions options_;
   Dataset dataset_;
-  std::string last_;       // name of the last pair taken
+  std::string last_;  // name of the last pair taken
   std::size_t taken_ = 0;
   mutable std::mutex intrinsics_mutex_;
 };
@@ -236,7 +244,8 @@ std::unique_ptr<FrameSource> make_replay_source(Dataset dataset, double speed) {
   return std::make_unique<ReplaySource>(std::move(dataset), speed);
 }
 
-std::unique_ptr<FrameSource> make_watch_source(const std::filesystem::path& dir, const WatchOptions& options) {
+std::unique_ptr<FrameSource> make_watch_source(const std::filesystem::path& dir,
+                                               const WatchOptions& options) {
   return std::make_unique<WatchSource>(dir, options);
 }
 

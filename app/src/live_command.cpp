@@ -36,7 +36,8 @@ class LatencyWindow {
   double percentile(double q) const {
     if (values_.empty()) return 0;
     std::vector<double> sorted(values_.begin(), values_.end());
-    const std::size_t k = std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())));
+    const std::size_t k = std::min(
+        sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())));
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
     return sorted[k];
   }
@@ -89,7 +90,8 @@ int run_live(const LiveOptions& o) {
   LatencyWindow latency;
   std::vector<StampedPose> truth;
   std::size_t paused_dropped = 0;
-  const std::size_t max_frames = o.dataset_options.max_frames > 0 ? std::size_t(o.dataset_options.max_frames) : 0;
+  const std::size_t max_frames =
+      o.dataset_options.max_frames > 0 ? std::size_t(o.dataset_options.max_frames) : 0;
   g_interrupted = 0;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -116,17 +118,23 @@ int run_live(const LiveOptions& o) {
         continue;
       }
       const FrameRecord record = live.process(arrived->frame);
-      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - arrived->arrived).count();
+      const double ms =
+          std::chrono::duration<double, std::milli>(Clock::now() - arrived->arrived).count();
       latency.add(ms);
-      if (!record.tracked) std::fprintf(stderr, "\nframe at %.3f s: tracking failed (%s)\n", record.timestamp, record.reason.c_str());
+      if (!record.tracked)
+        std::fprintf(stderr, "\nframe at %.3f s: tracking failed (%s)\n", record.timestamp,
+                     record.reason.c_str());
       outputs.add(record, 0);
-      if (arrived->T_world_cam_truth) truth.push_back({record.timestamp, *arrived->T_world_cam_truth});
+      if (arrived->T_world_cam_truth)
+        truth.push_back({record.timestamp, *arrived->T_world_cam_truth});
       const std::size_t n = outputs.records().size();
       char stats[256];
       std::snprintf(stats, sizeof(stats),
-                    "gslam live: %zu frames, %.1f frames/s, latency p95 %.0f ms, %zu Gaussians, %zu dropped%s",
-                    n, static_cast<double>(n) / std::max(1e-9, outputs.elapsed_seconds()), latency.percentile(0.95),
-                    record.gaussians, source->dropped() + paused_dropped, window && shared.paused ? ", paused" : "");
+                    "gslam live: %zu frames, %.1f frames/s, latency p95 %.0f ms, %zu Gaussians, "
+                    "%zu dropped%s",
+                    n, static_cast<double>(n) / std::max(1e-9, outputs.elapsed_seconds()),
+                    latency.percentile(0.95), record.gaussians, source->dropped() + paused_dropped,
+                    window && shared.paused ? ", paused" : "");
       {
         std::lock_guard lock(shared.mutex);
         shared.view.map = live.map();
@@ -139,7 +147,8 @@ int run_live(const LiveOptions& o) {
       progress.update(n, std::to_string(record.gaussians) + " Gaussians, latency p95 " +
                              std::to_string(static_cast<int>(latency.percentile(0.95))) + " ms, " +
                              std::to_string(source->dropped() + paused_dropped) + " dropped");
-      if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= o.checkpoint_seconds) {
+      if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >=
+          o.checkpoint_seconds) {
         outputs.checkpoint(*live.map(), keyframes(), true);
         last_checkpoint = Clock::now();
       }
@@ -182,8 +191,9 @@ int run_live(const LiveOptions& o) {
       if (window->closed() || g_interrupted) shared.stop = true;
       const bool last = done || shared.stop;  // draw once more, then leave
       // The screenshot once enough frames are tracked, or at the end if the stream was shorter.
-      const bool want_screenshot = !o.screenshot.empty() && !screenshot_taken &&
-                                   (tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) || last);
+      const bool want_screenshot =
+          !o.screenshot.empty() && !screenshot_taken &&
+          (tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) || last);
       const bool want_snapshot = window->take_snapshot_request();
       splat::Image8 capture;
       window->show(compose_live_view(state, window->view(), *view_rasterizer), title,
@@ -210,22 +220,26 @@ int run_live(const LiveOptions& o) {
   live.finish();
   if (error) std::rethrow_exception(error);
 
-  outputs.extra() = {
-      {"live",
-       {{"source", source->describe()},
-        {"frames_received", source->delivered() + source->dropped()},
-        {"frames_dropped", source->dropped() + paused_dropped},
-        {"frames_dropped_while_paused", paused_dropped},
-        {"tracking_latency_ms", {{"p50", latency.percentile(0.5)}, {"p95", latency.percentile(0.95)}}},
-        {"keyframes_mapped", live.keyframes_mapped()},
-        {"keyframes_skipped", live.keyframes_skipped()},
-        {"interrupted", g_interrupted != 0}}}};
+  outputs.extra() = {{"live",
+                      {{"source", source->describe()},
+                       {"frames_received", source->delivered() + source->dropped()},
+                       {"frames_dropped", source->dropped() + paused_dropped},
+                       {"frames_dropped_while_paused", paused_dropped},
+                       {"tracking_latency_ms",
+                        {{"p50", latency.percentile(0.5)}, {"p95", latency.percentile(0.95)}}},
+                       {"keyframes_mapped", live.keyframes_mapped()},
+                       {"keyframes_skipped", live.keyframes_skipped()},
+                       {"interrupted", g_interrupted != 0}}}};
   const std::shared_ptr<const splat::Gaussians> map = live.map();
   const splat::Gaussians empty;
-  outputs.finish(map ? *map : empty, live.keyframes_mapped(), *tracking_rasterizer, source->intrinsics(), truth);
-  std::printf("live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu skipped), %zu Gaussians -> %s\n",
-              outputs.records().size(), source->dropped() + paused_dropped, latency.percentile(0.95),
-              live.keyframes_mapped(), live.keyframes_skipped(), map ? map->size() : std::size_t(0), o.out.c_str());
+  outputs.finish(map ? *map : empty, live.keyframes_mapped(), *tracking_rasterizer,
+                 source->intrinsics(), truth);
+  std::printf(
+      "live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu "
+      "skipped), %zu Gaussians -> %s\n",
+      outputs.records().size(), source->dropped() + paused_dropped, latency.percentile(0.95),
+      live.keyframes_mapped(), live.keyframes_skipped(), map ? map->size() : std::size_t(0),
+      o.out.c_str());
   return 0;
 }
 

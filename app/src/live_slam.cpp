@@ -39,7 +39,8 @@ FrameRecord LiveSlam::process(const splat::RgbdFrame& frame) {
     record.timestamp = frame.timestamp;
     const auto start = std::chrono::steady_clock::now();
     mapper_.add_keyframe(frame, Eigen::Isometry3d::Identity());
-    record.mapping_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    record.mapping_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     record.keyframe = true;
     tracker_.start(frame.timestamp);
     publish();

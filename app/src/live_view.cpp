@@ -11,8 +11,8 @@ namespace {
 constexpr int kRenderWidth = kMapPanelWidth / 2, kRenderHeight = kLiveViewHeight / 2;
 
 splat::Camera view_camera(const LiveViewState& state, const ViewCamera& view) {
-  Intrinsics k{0.6 * kRenderWidth, 0.6 * kRenderWidth, kRenderWidth / 2.0, kRenderHeight / 2.0, kRenderWidth,
-               kRenderHeight};
+  Intrinsics k{0.6 * kRenderWidth,  0.6 * kRenderWidth, kRenderWidth / 2.0,
+               kRenderHeight / 2.0, kRenderWidth,       kRenderHeight};
   if (view.follow || !state.map || state.map->empty()) {
     // Half a metre behind and 0.2 m above the current camera (OpenCV axes: y down, z forward).
     Eigen::Isometry3d T_world_view = state.T_world_cam * Eigen::Translation3d(0, -0.2, -0.5);
@@ -44,7 +44,8 @@ void put(splat::Image8& image, const Panel& panel, int x, int y, const uint8_t r
 }
 
 // Line of width 2 between two pixels.
-void line(splat::Image8& image, const Panel& panel, Eigen::Vector2d a, Eigen::Vector2d b, const uint8_t rgb[3]) {
+void line(splat::Image8& image, const Panel& panel, Eigen::Vector2d a, Eigen::Vector2d b,
+          const uint8_t rgb[3]) {
   const int steps = static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff())) + 1;
   for (int s = 0; s <= steps; ++s) {
     const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(s) / steps);
@@ -55,7 +56,8 @@ void line(splat::Image8& image, const Panel& panel, Eigen::Vector2d a, Eigen::Ve
   }
 }
 
-void square(splat::Image8& image, const Panel& panel, Eigen::Vector2d centre, int half, const uint8_t rgb[3]) {
+void square(splat::Image8& image, const Panel& panel, Eigen::Vector2d centre, int half,
+            const uint8_t rgb[3]) {
   for (int dy = -half; dy <= half; ++dy) {
     for (int dx = -half; dx <= half; ++dx) {
       put(image, panel, static_cast<int>(centre.x()) + dx, static_cast<int>(centre.y()) + dy, rgb);
@@ -77,7 +79,8 @@ void draw_top_view(splat::Image8& image, const LiveViewState& state) {
   const Eigen::Vector2d mid = (lo + hi) / 2;
   const Eigen::Vector2d centre((panel.x0 + panel.x1) / 2.0, (panel.y0 + panel.y1) / 2.0);
   auto to_px = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector2d(centre.x() + (p.x() - mid.x()) * scale, centre.y() - (p.z() - mid.y()) * scale);
+    return Eigen::Vector2d(centre.x() + (p.x() - mid.x()) * scale,
+                           centre.y() - (p.z() - mid.y()) * scale);
   };
   for (std::size_t i = 1; i < state.trajectory.size(); ++i) {
     line(image, panel, to_px(state.trajectory[i - 1]), to_px(state.trajectory[i]), kTrajectoryRgb);
@@ -87,7 +90,8 @@ void draw_top_view(splat::Image8& image, const LiveViewState& state) {
 
 }  // namespace
 
-splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view, splat::Rasterizer& rasterizer) {
+splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view,
+                                splat::Rasterizer& rasterizer) {
   splat::Image8 out(kLiveViewWidth, kLiveViewHeight, 3, 24);
   const splat::Camera cam = view_camera(state, view);
   if (state.map && !state.map->empty()) {

@@ -37,8 +37,11 @@ void write_json(const std::filesystem::path& path, const nlohmann::json& j) {
   });
 }
 
-RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer)
-    : out_(std::move(out)), input_(std::move(input)), rasterizer_(rasterizer),
+RunOutputs::RunOutputs(std::filesystem::path out, std::string input,
+                       const splat::Rasterizer& rasterizer)
+    : out_(std::move(out)),
+      input_(std::move(input)),
+      rasterizer_(rasterizer),
       start_(std::chrono::steady_clock::now()) {
   std::filesystem::create_directories(out_);
 }
@@ -57,7 +60,8 @@ void RunOutputs::add(const FrameRecord& record, double loading_ms) {
   trajectory_.push_back({record.timestamp, record.T_world_cam});
 }
 
-nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes, bool complete) const {
+nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes,
+                                   bool complete) const {
   const double seconds = elapsed_seconds();
   const double n = std::max<double>(1, static_cast<double>(records_.size()));
   nlohmann::json j = {
@@ -69,7 +73,10 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
       {"gaussians", map.size()},
       {"fps", static_cast<double>(records_.size()) / std::max(seconds, 1e-9)},
       {"seconds", seconds},
-      {"time_per_frame_ms", {{"tracking", tracking_ms_ / n}, {"mapping", mapping_ms_ / n}, {"loading", loading_ms_ / n}}},
+      {"time_per_frame_ms",
+       {{"tracking", tracking_ms_ / n},
+        {"mapping", mapping_ms_ / n},
+        {"loading", loading_ms_ / n}}},
       {"tracking_failures", failures_},
       {"tracking_retries", retries_},
       {"peak_memory_mib", peak_memory_mib()},
@@ -89,8 +96,9 @@ void RunOutputs::checkpoint(const splat::Gaussians& map, std::size_t keyframes, 
   if (with_map && !map.empty()) save_map(out_ / "map.ply", map);
 }
 
-void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes, splat::Rasterizer& rasterizer,
-                        const splat::Camera& intrinsics, const std::vector<StampedPose>& truth) {
+void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
+                        splat::Rasterizer& rasterizer, const splat::Camera& intrinsics,
+                        const std::vector<StampedPose>& truth) {
   write_tum_trajectory(out_ / "trajectory.txt", trajectory_);
   if (!map.empty()) {
     save_map(out_ / "map.ply", map);
@@ -104,8 +112,8 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes, spla
       char name[32];
       std::snprintf(name, sizeof(name), "kf_%04zu", i);
       write_png_rgb(out_ / "keyframes" / (std::string(name) + ".png"), f.width, f.height, f.rgb);
-      write_render_exr(out_ / "keyframes" / (std::string(name) + ".exr"), f.width, f.height, f.rgb, f.alpha,
-                       f.depth_normalized);
+      write_render_exr(out_ / "keyframes" / (std::string(name) + ".exr"), f.width, f.height, f.rgb,
+                       f.alpha, f.depth_normalized);
     }
   }
   if (!truth.empty()) {

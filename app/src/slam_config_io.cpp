@@ -1,7 +1,6 @@
 #include "app/slam_config_io.h"
 
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "splat/error.h"

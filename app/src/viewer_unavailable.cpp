@@ -9,7 +9,8 @@ struct ViewerWindow::State {};
 bool viewer_built() { return false; }
 
 ViewerWindow::ViewerWindow(const std::string&) {
-  throw splat::Error("viewer: this build has no viewer (apt-get install libglfw3-dev libgl-dev); use --headless");
+  throw splat::Error(
+      "viewer: this build has no viewer (apt-get install libglfw3-dev libgl-dev); use --headless");
 }
 ViewerWindow::~ViewerWindow() = default;
 void ViewerWindow::show(const splat::Image8&, const std::string&, splat::Image8*) {}

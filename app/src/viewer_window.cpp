@@ -1,9 +1,9 @@
 #include "app/viewer_window.h"
 
+#include <GLFW/glfw3.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <GLFW/glfw3.h>
 
 #include "splat/error.h"
 
@@ -64,7 +64,8 @@ ViewerWindow::ViewerWindow(const std::string& title) : state_(std::make_unique<S
     throw splat::Error("viewer: cannot open a window (no display? set DISPLAY, or use --headless)");
   }
   glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
-  state_->window = glfwCreateWindow(kLiveViewWidth, kLiveViewHeight, title.c_str(), nullptr, nullptr);
+  state_->window =
+      glfwCreateWindow(kLiveViewWidth, kLiveViewHeight, title.c_str(), nullptr, nullptr);
   if (!state_->window) {
     glfwTerminate();
     throw splat::Error("viewer: cannot create an OpenGL window (use --headless)");
@@ -83,7 +84,8 @@ ViewerWindow::~ViewerWindow() {
   glfwTerminate();
 }
 
-void ViewerWindow::show(const splat::Image8& picture, const std::string& title, splat::Image8* capture) {
+void ViewerWindow::show(const splat::Image8& picture, const std::string& title,
+                        splat::Image8* capture) {
   glfwSetWindowTitle(state_->window, title.c_str());
   int fb_w = 0, fb_h = 0;
   glfwGetFramebufferSize(state_->window, &fb_w, &fb_h);

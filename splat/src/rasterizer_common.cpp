@@ -7,7 +7,8 @@
 namespace splat {
 
 template <typename Scalar>
-void validate_image_grads(const ForwardResultT<Scalar>& forward, const ImageGradsT<Scalar>& d_image) {
+void validate_image_grads(const ForwardResultT<Scalar>& forward,
+                          const ImageGradsT<Scalar>& d_image) {
   const std::size_t pixels = static_cast<std::size_t>(forward.width) * forward.height;
   auto check = [&](const std::vector<Scalar>& v, std::size_t channels, const char* name) {
     if (!v.empty() && v.size() != pixels * channels) {

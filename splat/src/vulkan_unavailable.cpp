@@ -8,7 +8,8 @@ namespace splat {
 bool vulkan_backend_built() { return false; }
 
 std::vector<VulkanDeviceInfo> list_vulkan_devices() {
-  throw Error("vulkan: this build has no Vulkan backend (configure with libvulkan-dev and glslang-tools)");
+  throw Error(
+      "vulkan: this build has no Vulkan backend (configure with libvulkan-dev and glslang-tools)");
 }
 
 std::unique_ptr<Rasterizer> make_vulkan_rasterizer(const VulkanOptions&) {

@@ -1,8 +1,8 @@
 // `gslam live`: the picture it composes, headless replay with dropped frames, a watched folder,
 // Ctrl-C, and the real window under Xvfb.
-#include <fstream>
-
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "app/image_io.h"
@@ -35,7 +35,8 @@ int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
   int n = 0;
   for (int y = 0; y < image.height; ++y) {
     for (int x = 0; x < app::kMapPanelWidth && x < image.width; ++x) {
-      n += image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
+      n +=
+          image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
     }
   }
   return n;
@@ -45,7 +46,8 @@ int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
 int count_map_pixels(const splat::Image8& image) {
   int n = 0;
   for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < app::kMapPanelWidth; ++x) n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
+    for (int x = 0; x < app::kMapPanelWidth; ++x)
+      n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
   }
   return n;
 }
@@ -73,16 +75,19 @@ TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
   EXPECT_EQ(picture.at(app::kMapPanelWidth + 10, 10, 0), 200) << "input frame not shown";
   app::ViewCamera orbit;
   orbit.follow = false;
-  EXPECT_GT(count_map_pixels(app::compose_live_view(state, orbit, *rasterizer)), 1000) << "orbit view";
+  EXPECT_GT(count_map_pixels(app::compose_live_view(state, orbit, *rasterizer)), 1000)
+      << "orbit view";
 }
 
 TEST(CliLive, HeadlessReplayWritesReconstructOutputsAndCountsDroppedFrames) {
   TempDir dir;
   const auto seq = synthetic(dir, 40);
   // 40 frames at 30 Hz (1.3 s): more than a CPU tracks at that rate, so some are dropped.
-  const auto r = run_gslam("live " + seq.string() + " --out " + (dir / "run").string() + " --headless");
+  const auto r =
+      run_gslam("live " + seq.string() + " --out " + (dir / "run").string() + " --headless");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* name : {"trajectory.txt", "map.ply", "map.glb", "summary.json", "keyframes/kf_0000.png"}) {
+  for (const char* name :
+       {"trajectory.txt", "map.ply", "map.glb", "summary.json", "keyframes/kf_0000.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
   }
   const nlohmann::json s = read_json(dir / "run" / "summary.json");
@@ -90,8 +95,10 @@ TEST(CliLive, HeadlessReplayWritesReconstructOutputsAndCountsDroppedFrames) {
   const std::size_t frames = s.at("frames").get<std::size_t>();
   EXPECT_TRUE(s.at("complete").get<bool>());
   EXPECT_EQ(live.at("frames_received").get<std::size_t>(), 40u);
-  EXPECT_EQ(frames + live.at("frames_dropped").get<std::size_t>(), 40u) << "every frame is tracked or dropped";
-  EXPECT_GT(live.at("frames_dropped").get<std::size_t>(), 0u) << "replay faster than tracking must drop";
+  EXPECT_EQ(frames + live.at("frames_dropped").get<std::size_t>(), 40u)
+      << "every frame is tracked or dropped";
+  EXPECT_GT(live.at("frames_dropped").get<std::size_t>(), 0u)
+      << "replay faster than tracking must drop";
   EXPECT_GE(frames, 2u);
   EXPECT_GT(live.at("tracking_latency_ms").at("p95").get<double>(), 0);
   EXPECT_EQ(app::read_tum_trajectory(dir / "run" / "trajectory.txt").size(), frames);
@@ -112,14 +119,18 @@ TEST(CliLive, WatchedFolderTakesPairsAsTheyAppearUntilEnd) {
     std::filesystem::copy_file(seq / "depth" / entry.path().filename(), watched / "depth" / name);
   }
   std::ofstream(watched / "END") << "\n";
-  const auto r = run_gslam("live " + watched.string() + " --watch --out " + (dir / "run").string() + " --headless");
+  const auto r = run_gslam("live " + watched.string() + " --watch --out " + (dir / "run").string() +
+                           " --headless");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json s = read_json(dir / "run" / "summary.json");
   EXPECT_GE(s.at("frames").get<std::size_t>(), 1u);
-  EXPECT_EQ(s.at("frames").get<std::size_t>() + s.at("live").at("frames_dropped").get<std::size_t>(), 3u);
-  const auto missing = run_gslam("live " + (dir / "nowhere").string() + " --watch --out " + (dir / "x").string() + " --headless");
+  EXPECT_EQ(
+      s.at("frames").get<std::size_t>() + s.at("live").at("frames_dropped").get<std::size_t>(), 3u);
+  const auto missing = run_gslam("live " + (dir / "nowhere").string() + " --watch --out " +
+                                 (dir / "x").string() + " --headless");
   EXPECT_NE(missing.exit_code, 0);
-  EXPECT_NE(missing.output.find("watched folder does not exist"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("watched folder does not exist"), std::string::npos)
+      << missing.output;
 }
 
 TEST(CliLive, CtrlCWritesCompleteOutputs) {
@@ -127,8 +138,9 @@ TEST(CliLive, CtrlCWritesCompleteOutputs) {
   TempDir dir;
   const auto seq = synthetic(dir, 30);
   // Replayed at a tenth of its rate, the run is still going when SIGINT arrives after 4 s.
-  const auto r = gslam::test::run_command("timeout --preserve-status -s INT 4 " + std::string(GSLAM_BINARY) + " live " +
-                                          seq.string() + " --out " + (dir / "run").string() + " --headless --speed 0.1");
+  const auto r = gslam::test::run_command(
+      "timeout --preserve-status -s INT 4 " + std::string(GSLAM_BINARY) + " live " + seq.string() +
+      " --out " + (dir / "run").string() + " --headless --speed 0.1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json s = read_json(dir / "run" / "summary.json");
   EXPECT_TRUE(s.at("complete").get<bool>());
@@ -141,19 +153,22 @@ TEST(CliLive, CtrlCWritesCompleteOutputs) {
 // the Vulkan backend (lavapipe in CI) where the build has it: its screenshot shows the map,
 // the yellow trajectory, the red current camera and the input frame.
 TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
-  if (!gslam::test::program_available("xvfb-run")) GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
+  if (!gslam::test::program_available("xvfb-run"))
+    GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
   TempDir dir;
   const auto seq = synthetic(dir, 12);
   const auto shot = dir / "shot.png";
   // lavapipe tracks a frame in about a second here: replay slowly enough to track several,
   // with a lighter mapping load.
   std::ofstream(dir / "light.json") << R"({"mapping": {"iterations": 10}})";
-  const std::string backend = splat::vulkan_backend_built()
-                                  ? " --backend vulkan --speed 0.05 --config " + (dir / "light.json").string()
-                                  : " --speed 0.25";
-  const auto r = gslam::test::run_command("xvfb-run -a -s '-screen 0 1280x1024x24' " + std::string(GSLAM_BINARY) +
-                                          " live " + seq.string() + " --out " + (dir / "run").string() + backend +
-                                          " --screenshot " + shot.string() + " --screenshot-after 3");
+  const std::string backend =
+      splat::vulkan_backend_built()
+          ? " --backend vulkan --speed 0.05 --config " + (dir / "light.json").string()
+          : " --speed 0.25";
+  const auto r = gslam::test::run_command(
+      "xvfb-run -a -s '-screen 0 1280x1024x24' " + std::string(GSLAM_BINARY) + " live " +
+      seq.string() + " --out " + (dir / "run").string() + backend + " --screenshot " +
+      shot.string() + " --screenshot-after 3");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_TRUE(std::filesystem::exists(shot)) << r.output;
   const splat::Image8 picture = app::read_png_rgb8(shot);

@@ -1,10 +1,10 @@
 // The Vulkan backend against the CPU reference on real trained 3DGS maps (../shared/data):
 // forward images pixel by pixel and every gradient group (norm-wise, see parity.h), from
 // orbit views around each map.
+#include <gtest/gtest.h>
+
 #include <random>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "app/ply_io.h"
 #include "app/views.h"
@@ -21,7 +21,8 @@ TEST_P(VulkanRealMap, ForwardAndBackwardMatchCpu) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
   GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
   const splat::Gaussians map = app::read_ply(path).gaussians;
-  const auto views = app::orbit_cameras(app::map_extent(map), 3, 160, 120, Eigen::Vector3d::UnitY());
+  const auto views =
+      app::orbit_cameras(app::map_extent(map), 3, 160, 120, Eigen::Vector3d::UnitY());
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.f, 1.f);
   for (std::size_t v = 0; v < views.size(); ++v) {
@@ -40,11 +41,12 @@ TEST_P(VulkanRealMap, ForwardAndBackwardMatchCpu) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Maps, VulkanRealMap,
-                         ::testing::Values("v3dg_donut_3dgs_ply/fused.ply",
-                                           "supersplat_fruit_drops_3dgs_ply/fruit_drops_minimal.ply"),
-                         [](const auto& info) {
-                           return std::string(info.param).substr(0, std::string(info.param).find('_'));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Maps, VulkanRealMap,
+    ::testing::Values("v3dg_donut_3dgs_ply/fused.ply",
+                      "supersplat_fruit_drops_3dgs_ply/fruit_drops_minimal.ply"),
+    [](const auto& info) {
+      return std::string(info.param).substr(0, std::string(info.param).find('_'));
+    });
 
 }  // namespace

@@ -1,10 +1,10 @@
 // The Vulkan backend against the CPU reference (runs on lavapipe in CI), and its device
 // handling. Skipped without a device unless GSLAM_REQUIRE_GPU_TESTS makes that a failure.
-#include <random>
-#include <tuple>
-#include <string>
-
 #include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <tuple>
 
 #include "splat/error.h"
 #include "splat/vulkan_rasterizer.h"
@@ -23,7 +23,8 @@ struct ParityCase {
 };
 void PrintTo(const ParityCase& c, std::ostream* os) { *os << c.name; }
 
-SceneOptions scene(uint32_t seed, int count, int degree, int width, int height, double max_opacity) {
+SceneOptions scene(uint32_t seed, int count, int degree, int width, int height,
+                   double max_opacity) {
   SceneOptions o;
   o.seed = seed;
   o.count = count;

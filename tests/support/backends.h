@@ -1,9 +1,9 @@
 // The rasterizer backends contract and parity tests run on.
 #pragma once
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "splat/rasterizer.h"
 
@@ -25,13 +25,13 @@ bool gpu_tests_required();
 
 // Declares `var` as the named backend's rasterizer; skips the test, or fails it when GPU tests
 // are required, if that backend cannot run here.
-#define GSLAM_REQUIRE_BACKEND(var, name)                                                  \
-  std::string var##_why_not;                                                            \
-  splat::Rasterizer* var##_ptr = ::gslam::test::shared_backend(name, var##_why_not);    \
-  if (!var##_ptr) {                                                                     \
-    if (::gslam::test::gpu_tests_required()) {                                          \
-      FAIL() << "backend " << (name) << " unavailable: " << var##_why_not;              \
-    }                                                                                   \
-    GTEST_SKIP() << "backend " << (name) << " unavailable: " << var##_why_not;          \
-  }                                                                                     \
+#define GSLAM_REQUIRE_BACKEND(var, name)                                             \
+  std::string var##_why_not;                                                         \
+  splat::Rasterizer* var##_ptr = ::gslam::test::shared_backend(name, var##_why_not); \
+  if (!var##_ptr) {                                                                  \
+    if (::gslam::test::gpu_tests_required()) {                                       \
+      FAIL() << "backend " << (name) << " unavailable: " << var##_why_not;           \
+    }                                                                                \
+    GTEST_SKIP() << "backend " << (name) << " unavailable: " << var##_why_not;       \
+  }                                                                                  \
   splat::Rasterizer& var = *var##_ptr

@@ -1,9 +1,9 @@
 #include "support/parity.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <gtest/gtest.h>
 
 namespace gslam::test {
 namespace {
@@ -15,8 +15,9 @@ void expect_images_close(const std::vector<float>& ref, const std::vector<float>
   for (std::size_t i = 0; i < ref.size(); ++i) {
     if (std::abs(ref[i] - ours[i]) <= kImageParity) continue;
     const std::size_t pixel = i / static_cast<std::size_t>(channels);
-    ADD_FAILURE() << label << ": " << name << " at pixel (" << pixel % width << ", " << pixel / width
-                  << ") channel " << i % channels << ": cpu " << ref[i] << ", vulkan " << ours[i];
+    ADD_FAILURE() << label << ": " << name << " at pixel (" << pixel % width << ", "
+                  << pixel / width << ") channel " << i % channels << ": cpu " << ref[i]
+                  << ", vulkan " << ours[i];
     if (++reported == 10) return;
   }
 }
@@ -81,7 +82,8 @@ void expect_backward_parity(const splat::BackwardResult& cpu, const splat::Backw
       diff += (double(ours[i]) - ref[i]) * (double(ours[i]) - ref[i]);
       norm += double(ref[i]) * ref[i];
     }
-    EXPECT_LE(std::sqrt(diff), kGradientParity * std::sqrt(norm)) << name << ": norm-wise relative error";
+    EXPECT_LE(std::sqrt(diff), kGradientParity * std::sqrt(norm))
+        << name << ": norm-wise relative error";
   };
   for (splat::ParamGroup group : splat::kAllParamGroups) {
     compare(splat::param_group(cpu.d_gaussians, group), splat::param_group(gpu.d_gaussians, group),

@@ -37,14 +37,15 @@ class FrameSource {
 std::unique_ptr<FrameSource> make_replay_source(Dataset dataset, double speed);
 
 struct WatchOptions {
-  std::string intrinsics;      // "fx,fy,cx,cy"; empty: DIR/intrinsics.txt ("fx fy cx cy")
-  double depth_scale = 5000;   // stored value per metre
-  double idle_timeout = 10;    // seconds without a new frame before the stream counts as ended
+  std::string intrinsics;     // "fx,fy,cx,cy"; empty: DIR/intrinsics.txt ("fx fy cx cy")
+  double depth_scale = 5000;  // stored value per metre
+  double idle_timeout = 10;   // seconds without a new frame before the stream counts as ended
 };
 
 // Watches DIR/rgb/NAME.png + DIR/depth/NAME.png pairs appear (written atomically by the driver:
 // to a temporary name, then renamed), in name order; NAME is the timestamp in seconds. The
 // stream ends when DIR/END exists or after options.idle_timeout seconds without a new pair.
-std::unique_ptr<FrameSource> make_watch_source(const std::filesystem::path& dir, const WatchOptions& options);
+std::unique_ptr<FrameSource> make_watch_source(const std::filesystem::path& dir,
+                                               const WatchOptions& options);
 
 }  // namespace app

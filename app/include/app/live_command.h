@@ -9,7 +9,8 @@
 namespace app {
 
 struct LiveOptions {
-  std::filesystem::path source;    // dataset folder to replay; with `watch`, the folder a driver writes
+  std::filesystem::path
+      source;  // dataset folder to replay; with `watch`, the folder a driver writes
   std::filesystem::path out;
   bool watch = false;
   WatchOptions watch_options;

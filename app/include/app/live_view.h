@@ -2,10 +2,9 @@
 // window: the map rendered from a follow or orbit camera with the trajectory drawn over it,
 // and the current input frame beside it.
 #pragma once
+#include <Eigen/Geometry>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "splat/camera.h"
 #include "splat/gaussians.h"
@@ -18,7 +17,7 @@ struct LiveViewState {
   std::shared_ptr<const splat::Gaussians> map;  // may be null before the first frame
   std::vector<Eigen::Vector3d> trajectory;      // camera centres, world frame
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // the current camera
-  splat::Image8 input;                          // the current colour frame (RGB)
+  splat::Image8 input;                                            // the current colour frame (RGB)
 };
 
 // How the map is looked at: behind the current camera (follow), or around the map's centre.
@@ -38,6 +37,7 @@ inline constexpr uint8_t kCameraRgb[3] = {255, 0, 0};
 // [kLiveViewHeight, kLiveViewWidth, 3]: the map panel (kMapPanelWidth wide, rendered at half
 // resolution and doubled) with the trajectory and current camera, the input frame scaled into
 // the top right, and a top view of the trajectory (world x, z) in the bottom right.
-splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view, splat::Rasterizer& rasterizer);
+splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view,
+                                splat::Rasterizer& rasterizer);
 
 }  // namespace app

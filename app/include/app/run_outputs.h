@@ -5,10 +5,9 @@
 #pragma once
 #include <chrono>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "app/dataset.h"
 #include "app/evaluation.h"

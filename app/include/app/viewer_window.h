@@ -23,7 +23,8 @@ class ViewerWindow {
 
   // Draws a [kLiveViewHeight, kLiveViewWidth, 3] picture and sets the title (the stats line).
   // With `capture`, also reads back what was drawn (the window's framebuffer) into it.
-  void show(const splat::Image8& picture, const std::string& title, splat::Image8* capture = nullptr);
+  void show(const splat::Image8& picture, const std::string& title,
+            splat::Image8* capture = nullptr);
   // Handles pending input events.
   void poll();
   bool closed() const;

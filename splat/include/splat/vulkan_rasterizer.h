@@ -19,12 +19,12 @@ struct VulkanOptions {
 struct VulkanDeviceInfo {
   int index = 0;
   std::string name;
-  std::string type;          // "discrete", "integrated", "virtual", "cpu" or "other"
-  std::string api_version;   // e.g. "1.3.238"
+  std::string type;         // "discrete", "integrated", "virtual", "cpu" or "other"
+  std::string api_version;  // e.g. "1.3.238"
   uint32_t subgroup_size = 0;
   bool float_atomics = false;  // VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd
   bool usable = false;
-  std::string problem;       // why the backend cannot run on it, when not usable
+  std::string problem;  // why the backend cannot run on it, when not usable
 };
 
 // Whether this build contains the Vulkan backend (GSLAM_ENABLE_VULKAN with the packages found).

@@ -56,7 +56,8 @@ void Buffer::allocate(std::size_t bytes, VkMemoryPropertyFlags required,
   vk_check(vkBindBufferMemory(device, buffer_, memory_, 0), "vkBindBufferMemory");
   capacity_ = bytes;
   context_->count_allocation(capacity_, false);
-  const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  const VkMemoryPropertyFlags host =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
   if ((context_->memory_flags(type) & host) == host) {
     vk_check(vkMapMemory(device, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
   }

@@ -10,12 +10,14 @@ namespace {
 constexpr uint32_t kMaxTimestamps = 512;  // per batch; later dispatches go untimed
 }  // namespace
 
-Kernel::Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindings, const char* name)
+Kernel::Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindings,
+               const char* name)
     : context_(context), bindings_(bindings), name_(name) {
   VkDevice device = context_.device();
   std::vector<VkDescriptorSetLayoutBinding> layout_bindings(bindings);
   for (uint32_t b = 0; b < bindings; ++b) {
-    layout_bindings[b] = {b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    layout_bindings[b] = {b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT,
+                          nullptr};
   }
   VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   set_info.bindingCount = bindings;
@@ -28,7 +30,8 @@ Kernel::Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindi
   layout_info.pSetLayouts = &set_layout_;
   layout_info.pushConstantRangeCount = 1;
   layout_info.pPushConstantRanges = &push;
-  vk_check(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout_), "vkCreatePipelineLayout");
+  vk_check(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout_),
+           "vkCreatePipelineLayout");
 
   VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   module_info.codeSize = spirv.size_bytes();
@@ -36,8 +39,13 @@ Kernel::Kernel(Context& context, std::span<const uint32_t> spirv, uint32_t bindi
   VkShaderModule module = VK_NULL_HANDLE;
   vk_check(vkCreateShaderModule(device, &module_info, nullptr, &module), "vkCreateShaderModule");
   VkComputePipelineCreateInfo pipeline_info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-  pipeline_info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0,
-                         VK_SHADER_STAGE_COMPUTE_BIT, module, "main", nullptr};
+  pipeline_info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                         nullptr,
+                         0,
+                         VK_SHADER_STAGE_COMPUTE_BIT,
+                         module,
+                         "main",
+                         nullptr};
   pipeline_info.layout = layout_;
   const VkResult r =
       vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline_);
@@ -57,14 +65,16 @@ CommandBatch::CommandBatch(Context& context) : context_(context) {
   info.commandPool = context_.command_pool();
   info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   info.commandBufferCount = 1;
-  vk_check(vkAllocateCommandBuffers(context_.device(), &info, &commands_), "vkAllocateCommandBuffers");
+  vk_check(vkAllocateCommandBuffers(context_.device(), &info, &commands_),
+           "vkAllocateCommandBuffers");
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   vk_check(vkCreateFence(context_.device(), &fence_info, nullptr, &fence_), "vkCreateFence");
   if (context_.timestamp_period_ns() > 0) {
     VkQueryPoolCreateInfo query_info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     query_info.queryType = VK_QUERY_TYPE_TIMESTAMP;
     query_info.queryCount = kMaxTimestamps;
-    vk_check(vkCreateQueryPool(context_.device(), &query_info, nullptr, &queries_), "vkCreateQueryPool");
+    vk_check(vkCreateQueryPool(context_.device(), &query_info, nullptr, &queries_),
+             "vkCreateQueryPool");
   }
 }
 
@@ -88,7 +98,8 @@ VkDescriptorSet CommandBatch::allocate_set(const Kernel& kernel) {
       info.poolSizeCount = 1;
       info.pPoolSizes = &size;
       VkDescriptorPool pool = VK_NULL_HANDLE;
-      vk_check(vkCreateDescriptorPool(context_.device(), &info, nullptr, &pool), "vkCreateDescriptorPool");
+      vk_check(vkCreateDescriptorPool(context_.device(), &info, nullptr, &pool),
+               "vkCreateDescriptorPool");
       pools_.push_back(pool);
     }
     VkDescriptorSetLayout layout = kernel.set_layout();
@@ -125,16 +136,23 @@ void CommandBatch::barrier() {
   b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT |
                     VK_ACCESS_HOST_READ_BIT;
-  const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+  const VkPipelineStageFlags stages =
+      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
   vkCmdPipelineBarrier(commands_, stages, stages | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &b, 0, nullptr,
                        0, nullptr);
 }
 
 void CommandBatch::dispatch(const Kernel& kernel, std::initializer_list<const Buffer*> buffers,
-                            std::initializer_list<uint32_t> push, uint32_t groups_x, uint32_t groups_y) {
+                            std::initializer_list<uint32_t> push, uint32_t groups_x,
+                            uint32_t groups_y) {
   if (buffers.size() != kernel.bindings()) {
     throw Error(std::string("vulkan: ") + kernel.name() + " binds " +
-                std::to_string(kernel.bindings()) + " buffers, got " + std::to_string(buffers.size()));
+                std::to_string(kernel.bindings()) + " buffers, got " +
+                std::to_string(buffers.size()));
+  }
+  if (push.size() > Kernel::kPushBytes / 4) {
+    throw Error(std::string("vulkan: ") + kernel.name() + " given " + std::to_string(push.size()) +
+                " push constants, at most " + std::to_string(Kernel::kPushBytes / 4));
   }
   if (groups_x == 0 || groups_y == 0) return;
   begin_recording();
@@ -151,13 +169,16 @@ void CommandBatch::dispatch(const Kernel& kernel, std::initializer_list<const Bu
     writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].pBufferInfo = &infos[i];
   }
-  vkUpdateDescriptorSets(context_.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
+  vkUpdateDescriptorSets(context_.device(), static_cast<uint32_t>(writes.size()), writes.data(), 0,
+                         nullptr);
   vkCmdBindPipeline(commands_, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.pipeline());
-  vkCmdBindDescriptorSets(commands_, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.layout(), 0, 1, &set, 0, nullptr);
+  vkCmdBindDescriptorSets(commands_, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.layout(), 0, 1, &set, 0,
+                          nullptr);
   uint32_t values[Kernel::kPushBytes / 4] = {};
   std::size_t k = 0;
   for (uint32_t v : push) values[k++] = v;
-  vkCmdPushConstants(commands_, kernel.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, Kernel::kPushBytes, values);
+  vkCmdPushConstants(commands_, kernel.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, Kernel::kPushBytes,
+                     values);
   vkCmdDispatch(commands_, groups_x, groups_y, 1);
   barrier();
   if (queries_ && timed_.size() + 1 < kMaxTimestamps) {
@@ -214,18 +235,21 @@ void CommandBatch::run() {
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &commands_;
     vk_check(vkQueueSubmit(context_.queue(), 1, &submit, fence_), "vkQueueSubmit");
-    vk_check(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    vk_check(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX),
+             "vkWaitForFences");
     vk_check(vkResetFences(context_.device(), 1, &fence_), "vkResetFences");
     vk_check(vkResetCommandBuffer(commands_, 0), "vkResetCommandBuffer");
     if (queries_ && !timed_.empty()) {
       std::vector<uint64_t> ticks(timed_.size() + 1);
-      vk_check(vkGetQueryPoolResults(context_.device(), queries_, 0, static_cast<uint32_t>(ticks.size()),
-                                     ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
-                                     VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
-               "vkGetQueryPoolResults");
+      vk_check(
+          vkGetQueryPoolResults(context_.device(), queries_, 0, static_cast<uint32_t>(ticks.size()),
+                                ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
+                                VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+          "vkGetQueryPoolResults");
       // Each dispatch's time: from the previous timestamp (transfers in between count too).
       for (std::size_t k = 0; k < timed_.size(); ++k) {
-        kernel_ms_[timed_[k]] += double(ticks[k + 1] - ticks[k]) * context_.timestamp_period_ns() * 1e-6;
+        kernel_ms_[timed_[k]] +=
+            double(ticks[k + 1] - ticks[k]) * context_.timestamp_period_ns() * 1e-6;
       }
     }
   }

@@ -6,9 +6,9 @@
 #include <functional>
 #include <initializer_list>
 #include <map>
-#include <string>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "vulkan/buffer.h"

@@ -1,12 +1,12 @@
 // The Vulkan instance, the chosen device and its compute queue. Owned by a rasterizer and
 // passed to what needs it; no globals.
 #pragma once
+#include <vulkan/vulkan.h>
+
 #include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <vulkan/vulkan.h>
 
 #include "splat/vulkan_rasterizer.h"
 
@@ -40,7 +40,10 @@ class Context {
   // Device memory allocated through Buffer, in bytes.
   std::size_t allocated_bytes() const { return allocated_.load(); }
   void count_allocation(std::size_t bytes, bool freed) {
-    if (freed) allocated_ -= bytes; else allocated_ += bytes;
+    if (freed)
+      allocated_ -= bytes;
+    else
+      allocated_ += bytes;
   }
 
  private:

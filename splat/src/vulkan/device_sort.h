@@ -18,7 +18,8 @@ class PrefixSum {
   void record(CommandBatch& batch, Buffer& data, uint32_t count, Buffer* total);
 
  private:
-  void record_level(CommandBatch& batch, Buffer& data, uint32_t count, std::size_t level, Buffer* total);
+  void record_level(CommandBatch& batch, Buffer& data, uint32_t count, std::size_t level,
+                    Buffer* total);
 
   Context& context_;
   Kernel blocks_, add_;

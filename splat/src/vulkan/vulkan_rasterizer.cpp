@@ -3,6 +3,8 @@
 // stable radix sort by tile -> tile ranges -> composite. Two submissions, because the number of
 // intersections must be known before their buffers are sized. backward and pose_jacobian
 // reuse the forward pass's device buffers, held by the ForwardResult.
+#include "splat/vulkan_rasterizer.h"
+
 #include <bit>
 #include <memory>
 #include <mutex>
@@ -15,19 +17,19 @@
 #include "rasterize_backward_spv.h"
 #include "rasterize_forward_spv.h"
 #include "rasterize_pose_jvp_spv.h"
+#include "render_stats.h"
 #include "shader_io.h"
 #include "splat/error.h"
-#include "splat/vulkan_rasterizer.h"
 #include "tiles_count_spv.h"
 #include "tiles_emit_spv.h"
 #include "tiles_finish_spv.h"
-#include "render_stats.h"
 #include "vulkan/device_sort.h"
 
 namespace splat::vk {
 namespace {
 
-constexpr uint32_t kParamFloats = 11;  // d_params per Gaussian: means 3, log-scales 3, rotation 4, opacity 1
+constexpr uint32_t kParamFloats =
+    11;  // d_params per Gaussian: means 3, log-scales 3, rotation 4, opacity 1
 
 uint32_t groups_for(std::size_t count) {
   return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
@@ -36,12 +38,41 @@ uint32_t groups_for(std::size_t count) {
 // Device buffers of one rendered frame; recycled through the rasterizer's pool.
 struct FrameState {
   explicit FrameState(Context& c)
-      : frame(c), means(c), log_scales(c), rotations(c), opacity_logits(c), sh(c), means2d(c),
-        conics(c), depths(c), radii(c), colors(c), opacities(c), tile_counts(c), depth_keys(c),
-        depth_order(c), depth_keys_tmp(c), depth_order_tmp(c), cull(c), offsets(c), total(c),
-        tile_keys(c), instances(c), tile_keys_tmp(c), instances_tmp(c), instance_gaussian(c),
-        first_instance(c), sorted_ids(c), sorted_position(c), tile_ranges(c), rgb(c), alpha(c),
-        depth(c), depth_normalized(c), last(c), transmittance(c) {}
+      : frame(c),
+        means(c),
+        log_scales(c),
+        rotations(c),
+        opacity_logits(c),
+        sh(c),
+        means2d(c),
+        conics(c),
+        depths(c),
+        radii(c),
+        colors(c),
+        opacities(c),
+        tile_counts(c),
+        depth_keys(c),
+        depth_order(c),
+        depth_keys_tmp(c),
+        depth_order_tmp(c),
+        cull(c),
+        offsets(c),
+        total(c),
+        tile_keys(c),
+        instances(c),
+        tile_keys_tmp(c),
+        instances_tmp(c),
+        instance_gaussian(c),
+        first_instance(c),
+        sorted_ids(c),
+        sorted_position(c),
+        tile_ranges(c),
+        rgb(c),
+        alpha(c),
+        depth(c),
+        depth_normalized(c),
+        last(c),
+        transmittance(c) {}
 
   const void* owner = nullptr;
   Buffer frame, means, log_scales, rotations, opacity_logits, sh;
@@ -105,7 +136,8 @@ void reserve_upload(CommandBatch& batch, Buffer& buffer, std::span<const T> data
 }
 
 template <typename T>
-void download_into(CommandBatch& batch, const Buffer& buffer, std::vector<T>& out, std::size_t count) {
+void download_into(CommandBatch& batch, const Buffer& buffer, std::vector<T>& out,
+                   std::size_t count) {
   out.resize(count);
   batch.download(buffer, out.data(), count * sizeof(T));
 }
@@ -131,9 +163,16 @@ class VulkanRasterizer final : public Rasterizer {
         project_backward_(*context_, kProjectBackwardSpv, 17, "project_backward"),
         project_pose_jvp_(*context_, kProjectPoseJvpSpv, 9, "project_pose_jvp"),
         rasterize_pose_jvp_(*context_, kRasterizePoseJvpSpv, 11, "rasterize_pose_jvp"),
-        d_rgb_(*context_), d_alpha_(*context_), d_depth_(*context_), isect_grads_(*context_),
-        d_params_(*context_), d_sh_(*context_), d_screen_(*context_), pose_partials_(*context_),
-        screen_jvp_(*context_), jacobian_(*context_) {}
+        d_rgb_(*context_),
+        d_alpha_(*context_),
+        d_depth_(*context_),
+        isect_grads_(*context_),
+        d_params_(*context_),
+        d_sh_(*context_),
+        d_screen_(*context_),
+        pose_partials_(*context_),
+        screen_jvp_(*context_),
+        jacobian_(*context_) {}
 
   std::string name() const override {
     const VulkanDeviceInfo& info = context_->info();
@@ -180,18 +219,19 @@ class VulkanRasterizer final : public Rasterizer {
     batch_.upload(d_alpha_, d_image.alpha.data(), d_image.alpha.size() * 4);
     batch_.upload(d_depth_, d_image.depth.data(), d_image.depth.size() * 4);
     batch_.fill_zero(isect_grads_, std::size_t(s.intersections) * io::kGradSlots * 4);
-    batch_.dispatch(rasterize_backward_,
-                    {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities,
-                     &s.colors, &s.depths, &s.last, &s.transmittance, &d_rgb_, &d_alpha_, &d_depth_,
-                     &isect_grads_},
-                    {uint32_t(!d_image.rgb.empty()), uint32_t(!d_image.alpha.empty()),
-                     uint32_t(!d_image.depth.empty())},
-                    s.tiles_x, s.tiles_y);
-    batch_.dispatch(project_backward_,
-                    {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh,
-                     &s.conics, &s.opacities, &s.radii, &s.tile_counts, &s.first_instance,
-                     &s.sorted_position, &isect_grads_, &d_params_, &d_sh_, &d_screen_, &pose_partials_},
-                    {}, groups_for(n));
+    batch_.dispatch(
+        rasterize_backward_,
+        {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities, &s.colors,
+         &s.depths, &s.last, &s.transmittance, &d_rgb_, &d_alpha_, &d_depth_, &isect_grads_},
+        {uint32_t(!d_image.rgb.empty()), uint32_t(!d_image.alpha.empty()),
+         uint32_t(!d_image.depth.empty())},
+        s.tiles_x, s.tiles_y);
+    batch_.dispatch(
+        project_backward_,
+        {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh, &s.conics,
+         &s.opacities, &s.radii, &s.tile_counts, &s.first_instance, &s.sorted_position,
+         &isect_grads_, &d_params_, &d_sh_, &d_screen_, &pose_partials_},
+        {}, groups_for(n));
     std::vector<float> params, screen, partials;
     BackwardResult out;
     GaussianGrads& d = out.d_gaussians;
@@ -302,8 +342,9 @@ class VulkanRasterizer final : public Rasterizer {
 
     // Submission 1: projection, depth sort, intersection counts and their total.
     s.frame.reserve(sizeof(params));
-    for (Buffer* b : {&s.depths, &s.opacities, &s.tile_counts, &s.depth_keys, &s.depth_order,
-                      &s.depth_keys_tmp, &s.depth_order_tmp, &s.cull, &s.offsets, &s.first_instance}) {
+    for (Buffer* b :
+         {&s.depths, &s.opacities, &s.tile_counts, &s.depth_keys, &s.depth_order, &s.depth_keys_tmp,
+          &s.depth_order_tmp, &s.cull, &s.offsets, &s.first_instance}) {
       b->reserve(n * 4);
     }
     s.means2d.reserve(n * 2 * 4);
@@ -327,7 +368,8 @@ class VulkanRasterizer final : public Rasterizer {
     const bool depth_in_tmp = sort_.record(batch_, s.depth_keys, s.depth_order, s.depth_keys_tmp,
                                            s.depth_order_tmp, uint32_t(n), 32);
     s.order = depth_in_tmp ? &s.depth_order_tmp : &s.depth_order;
-    batch_.dispatch(tiles_count_, {s.order, &s.tile_counts, &s.offsets}, {uint32_t(n)}, groups_for(n));
+    batch_.dispatch(tiles_count_, {s.order, &s.tile_counts, &s.offsets}, {uint32_t(n)},
+                    groups_for(n));
     scan_.record(batch_, s.offsets, uint32_t(n), &s.total);
     uint32_t intersections = 0;
     batch_.download(s.total, &intersections, 4);
@@ -347,8 +389,8 @@ class VulkanRasterizer final : public Rasterizer {
     s.rgb.reserve(pixels * 3 * 4);
     sort_.prepare(intersections);
     batch_.dispatch(tiles_emit_,
-                    {&s.frame, s.order, &s.offsets, &s.means2d, &s.radii, &s.tile_keys, &s.instances,
-                     &s.instance_gaussian, &s.first_instance},
+                    {&s.frame, s.order, &s.offsets, &s.means2d, &s.radii, &s.tile_keys,
+                     &s.instances, &s.instance_gaussian, &s.first_instance},
                     {}, groups_for(n));
     const uint32_t tile_bits = std::max(1u, uint32_t(std::bit_width(tiles - 1)));
     const bool tiles_in_tmp = sort_.record(batch_, s.tile_keys, s.instances, s.tile_keys_tmp,
@@ -360,11 +402,11 @@ class VulkanRasterizer final : public Rasterizer {
                     {&sorted_keys, &sorted_instances, &s.instance_gaussian, &s.sorted_ids,
                      &s.sorted_position, &s.tile_ranges},
                     {intersections}, groups_for(m));
-    batch_.dispatch(rasterize_forward_,
-                    {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities,
-                     &s.colors, &s.depths, &s.rgb, &s.alpha, &s.depth, &s.depth_normalized, &s.last,
-                     &s.transmittance},
-                    {}, s.tiles_x, s.tiles_y);
+    batch_.dispatch(
+        rasterize_forward_,
+        {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities, &s.colors,
+         &s.depths, &s.rgb, &s.alpha, &s.depth, &s.depth_normalized, &s.last, &s.transmittance},
+        {}, s.tiles_x, s.tiles_y);
 
     f.width = camera.width;
     f.height = camera.height;
