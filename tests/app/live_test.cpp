@@ -165,8 +165,12 @@ TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
       splat::vulkan_backend_built()
           ? " --backend vulkan --speed 0.05 --config " + (dir / "light.json").string()
           : " --speed 0.25";
+  // Under AddressSanitizer, leak checking is off for this process only: Mesa's GLX driver,
+  // unloaded by glfwTerminate, leaves 112 bytes that LeakSanitizer can no longer attribute
+  // (seen in `scripts/test.sh --sanitize`); memory errors are still checked.
   const auto r = gslam::test::run_command(
-      "xvfb-run -a -s '-screen 0 1280x1024x24' " + std::string(GSLAM_BINARY) + " live " +
+      "ASAN_OPTIONS=detect_leaks=0 xvfb-run -a -s '-screen 0 1280x1024x24' " +
+      std::string(GSLAM_BINARY) + " live " +
       seq.string() + " --out " + (dir / "run").string() + backend + " --screenshot " +
       shot.string() + " --screenshot-after 3");
   ASSERT_EQ(r.exit_code, 0) << r.output;
