@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <fstream>
 #include <string>
 
 #include "splat/error.h"
@@ -24,6 +25,14 @@ void write_atomically(const std::filesystem::path& path,
     std::filesystem::remove(tmp, ignored);
     throw;
   }
+}
+
+void write_json(const std::filesystem::path& path, const nlohmann::json& j) {
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out.flush()) throw splat::Error(tmp.string() + ": write failed");
+  });
 }
 
 }  // namespace app

@@ -65,7 +65,7 @@ int run_eval(const EvalOptions& o) {
                      {"psnr_masked_valid_depth_db", psnr_masked / n}}},
       {"gaussians", map.gaussians.size()},
   };
-  write_atomically(o.run / "eval.json", [&](const std::filesystem::path& tmp) { std::ofstream(tmp) << j.dump(2) << "\n"; });
+  write_json(o.run / "eval.json", j);
 
   // Plots: top view (the two axes along which the truth moves most) and error over time.
   Eigen::Vector3d lo = errors.truth.front(), hi = lo;

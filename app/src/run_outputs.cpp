@@ -29,14 +29,6 @@ double peak_memory_mib() {
 
 }  // namespace
 
-void write_json(const std::filesystem::path& path, const nlohmann::json& j) {
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream out(tmp);
-    out << j.dump(2) << "\n";
-    if (!out.flush()) throw splat::Error(tmp.string() + ": write failed");
-  });
-}
-
 RunOutputs::RunOutputs(std::filesystem::path out, std::string input,
                        const splat::Rasterizer& rasterizer)
     : out_(std::move(out)),

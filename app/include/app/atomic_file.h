@@ -2,6 +2,8 @@
 #include <filesystem>
 #include <functional>
 
+#include <nlohmann/json.hpp>
+
 namespace app {
 
 // Runs write(tmp) on a temporary path beside `path`, then renames it over `path`, so readers
@@ -9,5 +11,8 @@ namespace app {
 // write throws.
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
+
+// JSON written atomically (pretty-printed); throws splat::Error naming the file if writing fails.
+void write_json(const std::filesystem::path& path, const nlohmann::json& j);
 
 }  // namespace app

@@ -52,7 +52,5 @@ class RunOutputs {
   bool has_errors_ = false;
 };
 
-// JSON written atomically (pretty-printed).
-void write_json(const std::filesystem::path& path, const nlohmann::json& j);
 
 }  // namespace app
