@@ -18,62 +18,98 @@ static_assert(kSlots == io::kGradSlots && kOpacity == io::kSlotOpacity && kZ == 
 constexpr int kTile = static_cast<int>(io::kTileSize);
 constexpr int kTilePixels = kTile * kTile;
 
-// One splat's screen parameters, gathered so the pixel loop reads registers only.
+// One splat's screen parameters and culling bounds, packed so that an intersection costs one
+// memory access: tiles read splats in depth order, which scatters across the per-Gaussian arrays.
 template <typename T>
-struct Splat {
+struct alignas(64) Splat {
   T mx, my;       // 2D mean, pixels
   T ca, cb, cc;   // conic
   T opacity;
   T r, g, b, z;   // colour and camera depth
+  // alpha >= kAlphaMin needs sigma <= ln(opacity / kAlphaMin); `limit` adds kCullSlack to that.
+  // sigma <= limit is an ellipse reaching +-half_v rows above and below the mean.
+  T limit, det, half_v;
 };
 
+// Culling keeps pixels down to alpha = exp(-kCullSlack) kAlphaMin, so that rounding in the
+// bounds below can never cull a pixel the pixel loop would blend.
+inline constexpr double kCullSlack = 0.05;
+
 template <typename T>
-Splat<T> load_splat(const ForwardResultT<T>& f, uint32_t id) {
-  return {f.means2d[id * 2],      f.means2d[id * 2 + 1], f.conics[id * 3], f.conics[id * 3 + 1],
-          f.conics[id * 3 + 2],   f.opacities[id],       f.colors[id * 3], f.colors[id * 3 + 1],
-          f.colors[id * 3 + 2],   f.depths[id]};
+Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
+  Splat<T> sp{};
+  sp.mx = f.means2d[id * 2];
+  sp.my = f.means2d[id * 2 + 1];
+  sp.ca = f.conics[id * 3];
+  sp.cb = f.conics[id * 3 + 1];
+  sp.cc = f.conics[id * 3 + 2];
+  sp.opacity = f.opacities[id];
+  sp.r = f.colors[id * 3];
+  sp.g = f.colors[id * 3 + 1];
+  sp.b = f.colors[id * 3 + 2];
+  sp.z = f.depths[id];
+  sp.limit = std::log(sp.opacity / T(io::kAlphaMin)) + T(kCullSlack);
+  sp.det = sp.ca * sp.cc - sp.cb * sp.cb;
+  // 0.5 d^T Q d <= limit reaches |dv| <= sqrt(2 limit (Q^-1)_yy); -1 marks "reaches nothing".
+  const bool reaches = sp.limit > 0 && sp.det > 0 && sp.ca > 0 && sp.cc > 0;
+  sp.half_v = reaches ? std::sqrt(2 * sp.limit * sp.ca / sp.det) : T(-1);
+  return sp;
 }
 
-// Tile-local pixel rectangle [x0, x1) x [y0, y1) worth evaluating for a splat: its extent box
-// grown by one pixel. Outside the extent box alpha < kAlphaMin analytically (the extent is
-// where opacity * exp(-sigma) reaches kAlphaMin), so this equals evaluating the whole tile;
-// the one-pixel margin keeps rounding at the box edge from changing any pixel. The loops below
-// cut rows only and evaluate whole 16-pixel rows, one vector each.
-struct PixelRect {
-  int x0, y0, x1, y1;
-  bool empty() const { return x0 >= x1 || y0 >= y1; }
+// Every visible splat packed, indexed by Gaussian id (culled ones are never read).
+template <typename T>
+std::vector<Splat<T>> pack_splats(const ForwardResultT<T>& f, ThreadPool& pool) {
+  const std::size_t n = f.gaussians.size();
+  std::vector<Splat<T>> out(n);
+  constexpr std::size_t kChunk = 4096;
+  pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t c) {
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      if (f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0) out[i] = pack_splat(f, i);
+    }
+  });
+  return out;
+}
+
+// Splats are read in depth order, scattered over memory: fetch a few intersections ahead.
+inline constexpr int64_t kPrefetchAhead = 8;
+template <typename T>
+inline void prefetch_splat(const std::vector<Splat<T>>& splats, const std::vector<uint32_t>& ids,
+                           int64_t s) {
+  if (s >= 0 && s < static_cast<int64_t>(ids.size())) __builtin_prefetch(&splats[ids[s]]);
+}
+
+// The tile rows [y0, y1) in which some pixel can reach alpha >= kAlphaMin; the loops below
+// evaluate those rows whole (16 pixels, one vector), which equals evaluating the whole tile.
+// In offsets (u, v) from the mean, sigma <= limit is an ellipse. Its intersection with the
+// strip between the tile's first and last pixel centres is convex, so its rows are one
+// interval: up to the ellipse's top point (u = -b v / a) where that lies in the strip, else up
+// to where the nearer strip edge cuts the ellipse; likewise down to the bottom point.
+struct RowRange {
+  int y0 = 0, y1 = 0;
 };
 
 template <typename T>
-PixelRect splat_rect(const ForwardResultT<T>& f, uint32_t id, int tile_x0, int tile_y0) {
-  const T mx = f.means2d[id * 2] - T(tile_x0), my = f.means2d[id * 2 + 1] - T(tile_y0);
-  const T rx = T(f.radii[id * 2] + 1), ry = T(f.radii[id * 2 + 1] + 1);
-  // Pixel x (centre x + 0.5) is inside when mx - rx <= x + 0.5 <= mx + rx.
-  auto lo = [](T v) { return static_cast<int>(std::clamp(std::ceil(v - T(0.5)), T(0), T(kTile))); };
-  auto hi = [](T v) {
-    return static_cast<int>(std::clamp(std::floor(v - T(0.5)) + 1, T(0), T(kTile)));
+inline RowRange reach_rows(const Splat<T>& sp, int tile_x0, int tile_y0) {
+  if (sp.half_v < 0) return {};
+  const T u0 = T(tile_x0) + T(0.5) - sp.mx, u1 = u0 + T(kTile - 1);
+  const T u_top = -sp.cb * sp.half_v / sp.ca;  // the bottom point is (-u_top, -half_v)
+  // v where the line at u cuts the ellipse: (-b u +- sqrt(2 c limit - det u^2)) / c.
+  auto edge_cut = [&](T u_extreme, T sign, T& v) {
+    const T u = std::clamp(u_extreme, u0, u1);
+    if (u == u_extreme) {
+      v = sign * sp.half_v;
+      return true;
+    }
+    const T disc = 2 * sp.cc * sp.limit - sp.det * u * u;
+    v = (-sp.cb * u + sign * std::sqrt(std::max(disc, T(0)))) / sp.cc;
+    return disc >= 0;  // else the strip misses the ellipse altogether
   };
-  return {lo(mx - rx), lo(my - ry), hi(mx + rx), hi(my + ry)};
-}
-
-// Whether any pixel centre px in [px_first, px_last] of the row at py can reach alpha >= kAlphaMin.
-// Along a row sigma is a parabola in dx = mx - px: 0.5 a (dx - dx0)^2 + 0.5 dy^2 (c - b^2/a)
-// with dx0 = -b dy / a, so the test is exact; `limit` is ln(opacity / kAlphaMin) widened by
-// kRowCullSlack, so rounding in the pixel loop can never make a skipped row count.
-inline constexpr double kRowCullSlack = 0.05;  // keeps rows down to 0.95 * kAlphaMin
-template <typename T>
-bool row_reaches(const Splat<T>& sp, T limit, T py, T px_first, T px_last) {
-  const T dy = sp.my - py;
-  const T sigma_min = T(0.5) * dy * dy * (sp.cc - sp.cb * sp.cb / sp.ca);
-  if (sigma_min > limit) return false;
-  const T centre = sp.mx + sp.cb * dy / sp.ca;  // px where sigma is smallest on this row
-  const T half = std::sqrt(2 * (limit - sigma_min) / sp.ca);
-  return centre + half >= px_first && centre - half <= px_last;
-}
-
-template <typename T>
-T row_cull_limit(const Splat<T>& sp) {
-  return std::log(sp.opacity / T(io::kAlphaMin)) + T(kRowCullSlack);
+  T v_hi, v_lo;
+  if (!edge_cut(u_top, T(1), v_hi) || !edge_cut(-u_top, T(-1), v_lo)) return {};
+  // Row y (centre tile_y0 + y + 0.5) is inside when my + v_lo <= centre <= my + v_hi.
+  const T lo = sp.my + v_lo - T(tile_y0) - T(0.5), hi = sp.my + v_hi - T(tile_y0) - T(0.5);
+  return {static_cast<int>(std::clamp(std::ceil(lo), T(0), T(kTile))),
+          static_cast<int>(std::clamp(std::floor(hi) + 1, T(0), T(kTile)))};
 }
 
 // Per-pixel evaluation shared by forward and backward: offset, Mahalanobis term and alpha.
@@ -150,6 +186,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   f.final_transmittance.assign(pixels, 1);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
+  const std::vector<Splat<T>> splats = pack_splats(f, pool);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -168,16 +205,14 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
     int remaining = geo.width * geo.height;
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
     for (uint32_t s = begin; s < end && remaining > 0; ++s) {
+      prefetch_splat(splats, f.sorted_ids, int64_t(s) + kPrefetchAhead);
       const uint32_t id = f.sorted_ids[s];
-      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
-      if (rect.empty()) continue;
-      const Splat<T> sp = load_splat(f, id);
-      const T limit = row_cull_limit(sp);
+      const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
+      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
       const int32_t next_last = static_cast<int32_t>(s + 1);
-      for (int y = rect.y0; y < rect.y1; ++y) {
+      for (int y = rows.y0; y < rows.y1; ++y) {
         if (row_live[y] == 0) continue;
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
-        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
         T* row_trans = trans + y * kTile;
         T* row_done = done + y * kTile;
         T* row_r = acc_r + y * kTile;
@@ -203,8 +238,10 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
           row_last[x] = add > 0 ? next_last : row_last[x];
           row_done[x] += stop;
         }
-        int live = 0;
-        for (int x = 0; x < kTile; ++x) live += row_done[x] == 0;
+        T finished_pixels = 0;  // a float sum vectorizes; a count of (done == 0) does not
+#pragma omp simd reduction(+ : finished_pixels)
+        for (int x = 0; x < kTile; ++x) finished_pixels += row_done[x];
+        const int live = kTile - static_cast<int>(finished_pixels);
         const int finished = row_live[y] - live;
         row_live[y] = live;
         remaining -= finished;
@@ -240,6 +277,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
+  const std::vector<Splat<T>> splats = pack_splats(f, pool);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -273,17 +311,15 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
     const uint32_t begin = f.tile_ranges[tile * 2];
     for (int64_t s = int64_t(max_last) - 1; s >= int64_t(begin); --s) {
+      prefetch_splat(splats, f.sorted_ids, int64_t(s) + kPrefetchAhead);
       const uint32_t id = f.sorted_ids[s];
-      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
-      if (rect.empty()) continue;
-      const Splat<T> sp = load_splat(f, id);
-      const T limit = row_cull_limit(sp);
+      const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
+      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
       // Per-lane partial sums over the rows, reduced once per splat (in a fixed order).
       alignas(64) T lanes[kSlots][kTile] = {};
-      for (int y = rect.y0; y < rect.y1; ++y) {
+      for (int y = rows.y0; y < rows.y1; ++y) {
         if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
-        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
         const int row = y * kTile;
 #pragma omp simd
         for (int x = 0; x < kTile; ++x) {
@@ -368,6 +404,7 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
   const int w = f.width, h = f.height;
   constexpr int kOut = 5;  // r, g, b, depth, alpha
   std::vector<T> out(static_cast<std::size_t>(w) * h * kOut * 6, T(0));
+  const std::vector<Splat<T>> splats = pack_splats(f, pool);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
@@ -395,15 +432,12 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
     for (int y = 0; y < kTile; ++y) max_last = std::max(max_last, row_max_last[y]);
     for (int64_t s = f.tile_ranges[tile * 2]; s < max_last; ++s) {
       const uint32_t id = f.sorted_ids[s];
-      const PixelRect rect = splat_rect(f, id, geo.x0, geo.y0);
-      if (rect.empty()) continue;
-      const Splat<T> sp = load_splat(f, id);
-      const T limit = row_cull_limit(sp);
+      const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
+      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
       const T* jac = &screen_jvp[static_cast<std::size_t>(id) * kScreenValues * 6];
-      for (int y = rect.y0; y < rect.y1; ++y) {
+      for (int y = rows.y0; y < rows.y1; ++y) {
         if (s >= row_max_last[y]) continue;
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
-        if (!row_reaches(sp, limit, py, px0, px0 + T(kTile - 1))) continue;
         const int row = y * kTile;
 #pragma omp simd
         for (int x = 0; x < kTile; ++x) {

@@ -1,3 +1,4 @@
+#include "heap_tuning.h"
 #include "splat/cpu_reference.h"
 #include "splat/rasterizer.h"
 
@@ -6,7 +7,9 @@ namespace {
 
 class CpuRasterizer final : public Rasterizer {
  public:
-  explicit CpuRasterizer(const CpuOptions& options) : pool_(options.threads) {}
+  explicit CpuRasterizer(const CpuOptions& options) : pool_(options.threads) {
+    keep_freed_frame_memory();
+  }
 
   std::string name() const override {
     return "cpu (" + std::to_string(pool_.size()) + " threads)";

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <vector>
 
+#include "heap_tuning.h"
 #include "project_backward_spv.h"
 #include "project_forward_spv.h"
 #include "project_pose_jvp_spv.h"
@@ -468,6 +469,7 @@ std::vector<VulkanDeviceInfo> list_vulkan_devices() {
 }
 
 std::unique_ptr<Rasterizer> make_vulkan_rasterizer(const VulkanOptions& options) {
+  keep_freed_frame_memory();  // host copies of the images are frame-sized too
   return std::make_unique<vk::VulkanRasterizer>(options);
 }
 
