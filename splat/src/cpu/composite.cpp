@@ -220,7 +220,8 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         T* row_b = acc_b + y * kTile;
         T* row_z = acc_z + y * kTile;
         int32_t* row_last = last + y * kTile;
-#pragma omp simd
+        T any_stop = 0;
+#pragma omp simd reduction(max : any_stop)
         for (int x = 0; x < kTile; ++x) {
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
           const T t = row_trans[x];
@@ -237,11 +238,11 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
           row_trans[x] = add > 0 ? next_t : t;
           row_last[x] = add > 0 ? next_last : row_last[x];
           row_done[x] += stop;
+          any_stop = std::max(any_stop, stop);
         }
-        T finished_pixels = 0;  // a float sum vectorizes; a count of (done == 0) does not
-#pragma omp simd reduction(+ : finished_pixels)
-        for (int x = 0; x < kTile; ++x) finished_pixels += row_done[x];
-        const int live = kTile - static_cast<int>(finished_pixels);
+        if (any_stop == 0) continue;  // pixels finish rarely: count only when one did
+        int live = 0;
+        for (int x = 0; x < kTile; ++x) live += row_done[x] == 0;
         const int finished = row_live[y] - live;
         row_live[y] = live;
         remaining -= finished;

@@ -28,33 +28,49 @@ TileBox tile_box(const ForwardResultT<T>& f, std::size_t i) {
           grid(std::ceil(mx + ex), f.tiles_x), grid(std::ceil(my + ey), f.tiles_y)};
 }
 
-// Sort key: camera depth (positive, so its float bits order like the value), then Gaussian
-// index for ties, as a stable radix sort of gsplat's keys would order them.
+// Visible splat ids in front-to-back order, ties by index (as a stable radix sort of gsplat's
+// keys orders them): a stable LSD radix sort, 3 passes of 11 bits, of the depths' float bits
+// (positive, so the bits order like the values) over ids taken in increasing order.
 template <typename T>
-uint64_t depth_key(T depth, uint32_t id) {
-  const float d = static_cast<float>(depth);
-  return (static_cast<uint64_t>(std::bit_cast<uint32_t>(d)) << 32) | id;
+std::vector<uint32_t> depth_order(const ForwardResultT<T>& f) {
+  std::vector<uint32_t> ids, keys;
+  ids.reserve(f.stats.visible);
+  keys.reserve(f.stats.visible);
+  for (std::size_t i = 0; i < f.gaussians.size(); ++i) {
+    if (f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0) {
+      ids.push_back(static_cast<uint32_t>(i));
+      keys.push_back(std::bit_cast<uint32_t>(static_cast<float>(f.depths[i])));
+    }
+  }
+  std::vector<uint32_t> ids_tmp(ids.size()), keys_tmp(keys.size());
+  constexpr int kBits = 11, kBuckets = 1 << kBits;
+  for (int shift = 0; shift < 32; shift += kBits) {
+    std::vector<uint32_t> start(kBuckets + 1, 0);
+    for (uint32_t k : keys) ++start[((k >> shift) & (kBuckets - 1)) + 1];
+    for (int b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
+    for (std::size_t j = 0; j < keys.size(); ++j) {
+      const uint32_t slot = start[(keys[j] >> shift) & (kBuckets - 1)]++;
+      keys_tmp[slot] = keys[j];
+      ids_tmp[slot] = ids[j];
+    }
+    keys.swap(keys_tmp);
+    ids.swap(ids_tmp);
+  }
+  return ids;
 }
 
 }  // namespace
 
 template <typename T>
 void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
-  const std::size_t n = f.gaussians.size();
   f.tiles_x = static_cast<int>((f.camera.width + io::kTileSize - 1) / io::kTileSize);
   f.tiles_y = static_cast<int>((f.camera.height + io::kTileSize - 1) / io::kTileSize);
   const std::size_t tiles = static_cast<std::size_t>(f.tiles_x) * f.tiles_y;
 
   // 1. Visible splats in front-to-back order, once: sorting N splats is far cheaper than
   //    sorting every tile's list, and a stable scatter below keeps each tile in this order.
-  std::vector<uint64_t> order;
-  order.reserve(f.stats.visible);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0) {
-      order.push_back(depth_key(f.depths[i], static_cast<uint32_t>(i)));
-    }
-  }
-  std::sort(order.begin(), order.end());
+  const std::vector<uint32_t> order = depth_order(f);
+  std::vector<TileBox> boxes(order.size());
 
   // 2. Count intersections per tile in fixed chunks of that order (no atomics; the chunking
   //    does not depend on the thread count).
@@ -63,13 +79,15 @@ void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
   std::vector<uint32_t> chunk_counts(chunks * tiles, 0);
   auto chunk_splats = [&](std::size_t c, auto&& visit) {
     for (std::size_t k = c * kChunk; k < std::min(order.size(), (c + 1) * kChunk); ++k) {
-      const uint32_t id = static_cast<uint32_t>(order[k]);
-      const TileBox b = tile_box(f, id);
+      const TileBox& b = boxes[k];
       for (int ty = b.y0; ty < b.y1; ++ty)
-        for (int tx = b.x0; tx < b.x1; ++tx) visit(static_cast<std::size_t>(ty * f.tiles_x + tx), id);
+        for (int tx = b.x0; tx < b.x1; ++tx) visit(static_cast<std::size_t>(ty * f.tiles_x + tx), order[k]);
     }
   };
   pool.parallel_for(chunks, [&](std::size_t c) {
+    for (std::size_t k = c * kChunk; k < std::min(order.size(), (c + 1) * kChunk); ++k) {
+      boxes[k] = tile_box(f, order[k]);
+    }
     uint32_t* counts = &chunk_counts[c * tiles];
     chunk_splats(c, [&](std::size_t tile, uint32_t) { ++counts[tile]; });
   });
