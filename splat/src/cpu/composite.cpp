@@ -155,7 +155,7 @@ inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
 // 1 where the forward pass blended sorted splat s into a pixel whose contributors end at
 // `last`, else 0 (a float select, so the pixel loops stay vectorized).
 template <typename T>
-inline T blended(int64_t s, int32_t last, const PixelEval<T>& e) {
+inline T blended(int32_t s, int32_t last, const PixelEval<T>& e) {  // int32: half the lanes of int64
   const T alpha_here = s < last ? e.alpha : T(0);
   return alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
 }
@@ -312,7 +312,8 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
     const uint32_t begin = f.tile_ranges[tile * 2];
     for (int64_t s = int64_t(max_last) - 1; s >= int64_t(begin); --s) {
-      prefetch_splat(splats, f.sorted_ids, int64_t(s) + kPrefetchAhead);
+      prefetch_splat(splats, f.sorted_ids, s - kPrefetchAhead);  // back to front
+      const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
       const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
@@ -326,7 +327,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          const T live = blended(s, last[p], e);
+          const T live = blended(s32, last[p], e);
           const T inv = live / (1 - e.alpha);
           const T t = live > 0 ? trans[p] * inv : trans[p];  // transmittance in front of it
           const T weight = live * e.alpha * t;
@@ -432,6 +433,8 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
     int64_t max_last = 0;
     for (int y = 0; y < kTile; ++y) max_last = std::max(max_last, row_max_last[y]);
     for (int64_t s = f.tile_ranges[tile * 2]; s < max_last; ++s) {
+      prefetch_splat(splats, f.sorted_ids, s + kPrefetchAhead);
+      const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
       const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
@@ -444,7 +447,7 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          const T live = blended(s, last[p], e);
+          const T live = blended(s32, last[p], e);
           const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
           const T weight = live * e.alpha * trans[p];
           const T inv = live / (1 - e.alpha);

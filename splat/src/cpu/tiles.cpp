@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "cpu/stages.h"
 #include "shader_io.h"
+#include "splat/error.h"
 
 namespace splat::cpu {
 namespace {
@@ -93,15 +95,19 @@ void bin_and_sort(ForwardResultT<T>& f, ThreadPool& pool) {
   });
   // 3. Exclusive prefix over (tile, chunk): where each chunk writes inside each tile's range.
   f.tile_ranges.assign(tiles * 2, 0);
-  uint32_t offset = 0;
+  uint64_t offset = 0;
   for (std::size_t t = 0; t < tiles; ++t) {
-    f.tile_ranges[t * 2] = offset;
+    f.tile_ranges[t * 2] = static_cast<uint32_t>(offset);
     for (std::size_t c = 0; c < chunks; ++c) {
       const uint32_t count = chunk_counts[c * tiles + t];
-      chunk_counts[c * tiles + t] = offset;
+      chunk_counts[c * tiles + t] = static_cast<uint32_t>(offset);
       offset += count;
     }
-    f.tile_ranges[t * 2 + 1] = offset;
+    // Sorted positions are int32 in compositing (last contributors, vector compares).
+    if (offset > static_cast<uint64_t>(INT32_MAX)) {
+      throw Error("rasterize: more than 2^31 (splat, tile) intersections; render at a lower resolution or with fewer Gaussians");
+    }
+    f.tile_ranges[t * 2 + 1] = static_cast<uint32_t>(offset);
   }
   f.stats.intersections = offset;
   // 4. Scatter in depth order: each tile's list comes out sorted by (depth, index).
