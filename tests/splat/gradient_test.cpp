@@ -1,6 +1,7 @@
 // The backward pass against central finite differences, in double, on random smooth scenes:
 // every parameter group and all six pose directions, with colour, alpha and depth losses.
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -163,6 +164,11 @@ TEST_P(RasterizerGradients, PoseJacobianMatchesFiniteDifferencesAndBackward) {
 INSTANTIATE_TEST_SUITE_P(
     RandomScenes, RasterizerGradients,
     ::testing::Values(GradientCase{1, 3, 6, false}, GradientCase{2, 0, 10, true},
-                      GradientCase{3, 1, 8, false}, GradientCase{4, 2, 12, true}));
+                      GradientCase{3, 1, 8, false}, GradientCase{4, 2, 12, true}),
+    [](const ::testing::TestParamInfo<GradientCase>& info) {  // stable, readable test names
+      const GradientCase& c = info.param;
+      return "seed" + std::to_string(c.seed) + "_sh" + std::to_string(c.sh_degree) + "_n" +
+             std::to_string(c.count) + (c.background ? "_background" : "");
+    });
 
 }  // namespace

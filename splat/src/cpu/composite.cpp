@@ -374,20 +374,27 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   g.opacities.assign(n, 0);
   g.colors.assign(n * 3, 0);
   g.depths.assign(n, 0);
-  for (std::size_t s = 0; s < f.sorted_ids.size(); ++s) {
-    const std::size_t id = f.sorted_ids[s];
-    const T* in = &isect[s * kSlots];
-    g.means2d[id * 2] += in[kMx];
-    g.means2d[id * 2 + 1] += in[kMy];
-    g.conics[id * 3] += in[kCa];
-    g.conics[id * 3 + 1] += in[kCb];
-    g.conics[id * 3 + 2] += in[kCc];
-    g.opacities[id] += in[kOpacity];
-    g.colors[id * 3] += in[kR];
-    g.colors[id * 3 + 1] += in[kG];
-    g.colors[id * 3 + 2] += in[kB];
-    g.depths[id] += in[kZ];
-  }
+  // Each part sums the Gaussians of its id range, every one in sorted order, so the result does
+  // not depend on how many parts there are.
+  const std::size_t parts = static_cast<std::size_t>(pool.size());
+  pool.parallel_for(parts, [&](std::size_t part) {
+    const std::size_t id_begin = n * part / parts, id_end = n * (part + 1) / parts;
+    for (std::size_t s = 0; s < f.sorted_ids.size(); ++s) {
+      const std::size_t id = f.sorted_ids[s];
+      if (id < id_begin || id >= id_end) continue;
+      const T* in = &isect[s * kSlots];
+      g.means2d[id * 2] += in[kMx];
+      g.means2d[id * 2 + 1] += in[kMy];
+      g.conics[id * 3] += in[kCa];
+      g.conics[id * 3 + 1] += in[kCb];
+      g.conics[id * 3 + 2] += in[kCc];
+      g.opacities[id] += in[kOpacity];
+      g.colors[id * 3] += in[kR];
+      g.colors[id * 3 + 1] += in[kG];
+      g.colors[id * 3 + 2] += in[kB];
+      g.depths[id] += in[kZ];
+    }
+  });
   return g;
 }
 
