@@ -11,7 +11,6 @@
 #include "splat/error.h"
 
 namespace app {
-
 int run_reconstruct(const ReconstructOptions& o) {
   std::filesystem::create_directories(o.out);
   std::filesystem::path input = o.dataset;
@@ -49,6 +48,19 @@ int run_reconstruct(const ReconstructOptions& o) {
     if ((i + 1) % every == 0) outputs.checkpoint(slam.map(), slam.keyframes_added(), (i + 1) % (5 * every) == 0);
   }
   progress.finish();
+  if (config.refine_passes > 0 && slam.keyframes_added() > 0) {
+    const std::size_t visits = slam.keyframes_added() * static_cast<std::size_t>(config.refine_passes);
+    Progress refine_progress("refine", visits, "keyframe visits");
+    const std::size_t pruned = slam.refine_map(
+        outputs.records(), [&](std::size_t i) { return dataset.load(i); },
+        [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map().size()) + " Gaussians"); });
+    refine_progress.finish();
+    outputs.extra()["refinement"] = {{"keyframes", slam.keyframes_added()}, {"passes", config.refine_passes},
+                                     {"iterations_per_visit", config.refine_iterations}, {"pruned", pruned},
+                                     {"seconds", refine_progress.elapsed_seconds()}};
+    std::fprintf(stderr, "refined the map: %zu keyframes x %d passes in %.1f s, %zu Gaussians pruned\n",
+                 slam.keyframes_added(), config.refine_passes, refine_progress.elapsed_seconds(), pruned);
+  }
   std::vector<StampedPose> truth;
   for (const auto& e : dataset.entries) {
     if (e.T_world_cam_truth) truth.push_back({e.timestamp, *e.T_world_cam_truth});

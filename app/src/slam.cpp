@@ -1,7 +1,9 @@
 #include "app/slam.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
 
 #include "splat/se3.h"
 
@@ -20,6 +22,10 @@ SlamConfig::SlamConfig() {
   mapping.resolution_factor = 2;
   mapping.iterations = 45;  // teddy, first 100 frames: 30 -> 45 took ATE 1.31 -> 1.11 cm, 1.44 -> 1.21 fps
   mapping.seed.scale_factor = 0.6;
+  // Teddy, first 100 frames: PSNR 20.3 -> 24.0 dB (SSIM 0.78 -> 0.85) for 14 s; 8 passes gave
+  // 24.1 dB and refining at full resolution 24.05 dB, each for 2.5x the time.
+  refine_passes = 3;
+  refine_iterations = 5;
 }
 
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
@@ -84,7 +90,28 @@ void FrameTracker::keyframe_added(const Eigen::Isometry3d& T_world_cam) {
 }
 
 SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
-    : tracker_(rasterizer, config), mapper_(rasterizer, config.mapping) {}
+    : config_(config), tracker_(rasterizer, config), mapper_(rasterizer, config.mapping) {}
+
+std::size_t SlamSystem::refine_map(const std::vector<FrameRecord>& records,
+                                   const std::function<splat::RgbdFrame(std::size_t)>& load,
+                                   const std::function<void(std::size_t, std::size_t)>& visited) {
+  std::vector<std::size_t> keyframes;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (records[i].keyframe) keyframes.push_back(i);
+  }
+  if (config_.refine_passes <= 0 || keyframes.empty()) return 0;
+  std::mt19937 rng(1);
+  const std::size_t total = keyframes.size() * static_cast<std::size_t>(config_.refine_passes);
+  std::size_t done = 0;
+  for (int pass = 0; pass < config_.refine_passes; ++pass) {
+    std::shuffle(keyframes.begin(), keyframes.end(), rng);
+    for (const std::size_t i : keyframes) {
+      mapper_.refine(load(i), records[i].T_world_cam.inverse(), config_.refine_iterations);
+      if (visited) visited(++done, total);
+    }
+  }
+  return mapper_.prune();
+}
 
 FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   if (!tracker_.started()) {

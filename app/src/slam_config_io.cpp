@@ -21,6 +21,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
     get(j, "keyframe_every", c.keyframe_every);
     get(j, "keyframe_translation", c.keyframe_translation);
     get(j, "keyframe_rotation_deg", c.keyframe_rotation_deg);
+    get(j, "refine_passes", c.refine_passes);
+    get(j, "refine_iterations", c.refine_iterations);
     if (j.contains("tracking")) {
       const auto& t = j.at("tracking");
       get(t, "pyramid", c.tracking.pyramid);
@@ -35,11 +37,15 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "iterations", c.mapping.iterations);
       get(m, "window", c.mapping.window);
       get(m, "resolution_factor", c.mapping.resolution_factor);
+      get(m, "refine_resolution_factor", c.mapping.refine_resolution_factor);
       get(m, "seed_stride", c.mapping.seed.stride);
       get(m, "isotropic", c.mapping.isotropic);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());
+  }
+  if (c.refine_passes < 0 || c.refine_iterations < 0) {
+    throw splat::Error(path.string() + ": refine_passes and refine_iterations must be >= 0");
   }
   c.tracking.validate();
   c.mapping.validate();

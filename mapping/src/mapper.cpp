@@ -10,7 +10,7 @@ namespace mapping {
 
 void MapperConfig::validate() const {
   auto fail = [](const std::string& what) { throw splat::Error("MapperConfig: " + what); };
-  if (resolution_factor < 1) fail("resolution_factor must be >= 1");
+  if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
   if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
   if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
 }
@@ -110,6 +110,14 @@ std::size_t Mapper::prune() {
     adam_.remove(keep);
   }
   return removed;
+}
+
+double Mapper::refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, int iterations) {
+  if (map_.empty()) return 0;
+  const Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
+  double loss = 0;
+  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf);
+  return loss;
 }
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {

@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ struct SlamConfig {
   int keyframe_every = 5;
   double keyframe_translation = 0.05;  // metres
   double keyframe_rotation_deg = 5.0;
+  // After the last frame (offline runs): sweep every keyframe, reloaded from the dataset, this
+  // many times in shuffled order with `refine_iterations` map steps per visit.
+  int refine_passes = 0;  // set by the constructor, like the other defaults tuned on teddy
+  int refine_iterations = 0;
   SlamConfig();
 };
 
@@ -68,8 +73,16 @@ class SlamSystem {
   FrameRecord process(const splat::RgbdFrame& frame);
   const splat::Gaussians& map() const { return mapper_.map(); }
   std::size_t keyframes_added() const { return keyframes_; }
+  // The final sweep (SlamConfig::refine_passes) over the keyframes among `records` (as
+  // process() returned them, one per frame), each reloaded with load(frame index) when visited
+  // so memory stays bounded; a shuffled order, the same on every run. Then prunes. Calls
+  // visited(done, total) after each visit. Returns the number of Gaussians pruned.
+  std::size_t refine_map(const std::vector<FrameRecord>& records,
+                         const std::function<splat::RgbdFrame(std::size_t)>& load,
+                         const std::function<void(std::size_t, std::size_t)>& visited = {});
 
  private:
+  SlamConfig config_;
   FrameTracker tracker_;
   mapping::Mapper mapper_;
   std::size_t keyframes_ = 0;

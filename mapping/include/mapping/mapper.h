@@ -14,6 +14,7 @@ namespace mapping {
 
 struct MapperConfig {
   int resolution_factor = 2;  // keyframes are stored and optimized at 1/factor resolution
+  int refine_resolution_factor = 2;  // the same for the final refinement (refine())
   int iterations = 15;        // Adam steps per keyframe
   int window = 4;             // keyframes per optimization window (the new one included)
   std::size_t max_keyframes = 12;  // stored keyframes; the least covisible is dropped beyond
@@ -51,6 +52,13 @@ class Mapper {
   // over a window of covisible keyframes and prunes. The first keyframe seeds the map.
   MappingStats add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
 
+  // Final refinement: `iterations` Adam steps of the map on one earlier keyframe (at
+  // refine_resolution_factor), which the bounded keyframe store may have dropped. Sweeping every keyframe this
+  // way undoes what later windows did to regions they saw poorly. No densification or pruning.
+  double refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, int iterations);
+  // Removes transparent and oversized Gaussians; returns how many.
+  std::size_t prune();
+
   const splat::Gaussians& map() const { return map_; }
   std::size_t keyframes() const { return keyframes_.size(); }
 
@@ -62,7 +70,6 @@ class Mapper {
   std::size_t densify(const Keyframe& kf);
   std::vector<const Keyframe*> window_for(const Keyframe& newest);
   double optimize_step(const Keyframe& kf);
-  std::size_t prune();
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
