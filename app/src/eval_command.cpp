@@ -81,12 +81,19 @@ int run_eval(const EvalOptions& o) {
     gx.push_back(errors.truth[k][a]), gy.push_back(errors.truth[k][b]);
     ex.push_back(errors.aligned_estimate[k][a]), ey.push_back(errors.aligned_estimate[k][b]);
   }
-  top.add(gx, gy, {0, 0, 0});
-  top.add(ex, ey, {220, 30, 30});
+  const char* axis_names[3] = {"x", "y", "z"};
+  top.labels(std::string(axis_names[a]) + " (m)", std::string(axis_names[b]) + " (m)");
+  top.title("top view, estimate aligned to ground truth");
+  top.add(gx, gy, {0, 0, 0}, "ground truth");
+  top.add(ex, ey, {220, 30, 30}, "estimate");
   write_png_rgb8(o.run / "trajectory_top.png", top.render());
   LinePlot curve(800, 300);
   std::vector<double> t, e;
   for (std::size_t k = 0; k < errors.times.size(); ++k) t.push_back(errors.times[k] - errors.times.front()), e.push_back(errors.ate_errors[k] * 100);
+  curve.labels("time (s)", "ATE (cm)");
+  char rmse[64];
+  std::snprintf(rmse, sizeof rmse, "position error after alignment, RMSE %.2f cm", errors.ate_rmse * 100);
+  curve.title(rmse);
   curve.add(t, e, {30, 60, 200});
   write_png_rgb8(o.run / "ate_over_time.png", curve.render());
 

@@ -7,25 +7,37 @@
 
 namespace app {
 
-// A minimal line plot rendered into an RGB image: axes scaled to the data with a margin,
-// polylines in given colours, a frame. Enough for trajectories and error curves.
+// A line plot rendered into an RGB image: axes scaled to the data, ticks at round values with
+// their numbers, axis titles, polylines in given colours and an optional legend. Enough for
+// trajectories and error curves.
 class LinePlot {
  public:
   LinePlot(int width, int height);
-  // Adds a polyline (x[i], y[i]) in an RGB colour.
-  void add(const std::vector<double>& x, const std::vector<double>& y, std::array<uint8_t, 3> color);
+  // Adds a polyline (x[i], y[i]) in an RGB colour; a non-empty name goes into the legend.
+  void add(const std::vector<double>& x, const std::vector<double>& y, std::array<uint8_t, 3> color,
+           std::string name = {});
   // Keeps one unit the same length on both axes (for top views).
   void equal_axes(bool equal) { equal_ = equal; }
+  void labels(std::string x_label, std::string y_label) {
+    x_label_ = std::move(x_label);
+    y_label_ = std::move(y_label);
+  }
+  void title(std::string text) { title_ = std::move(text); }
   splat::Image8 render() const;
 
  private:
   struct Series {
     std::vector<double> x, y;
     std::array<uint8_t, 3> color;
+    std::string name;
   };
   int width_, height_;
   bool equal_ = false;
+  std::string x_label_, y_label_, title_;
   std::vector<Series> series_;
 };
+
+// Round tick values (1, 2 or 5 times a power of ten apart) covering [lo, hi], about `count`.
+std::vector<double> nice_ticks(double lo, double hi, int count);
 
 }  // namespace app
