@@ -1,5 +1,6 @@
 #include "splat/losses.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -67,24 +68,17 @@ void blur(const std::vector<double>& in, std::vector<double>& out, int width, in
   static const Window window;
   std::vector<double> tmp(in.size(), 0.0);
   out.assign(in.size(), 0.0);
-  // Horizontal: taps outside the row are skipped (zero padding); interior pixels need no check.
+  // Horizontal: tap by tap over the pixels it reaches (taps outside the row are zero padding),
+  // so the pixel loop vectorizes; each pixel still sums its taps in order.
   for (int y = 0; y < height; ++y) {
     const double* row = &in[std::size_t(y) * width];
     double* dst = &tmp[std::size_t(y) * width];
-    for (int x = 0; x < width; ++x) {
-      const bool interior = x >= kRadius && x + kRadius < width;
-      double s = 0;
-      if (interior) {
-        for (int k = -kRadius; k <= kRadius; ++k) s += window.w[k + kRadius] * row[x + k];
-      } else {
-        for (int k = -kRadius; k <= kRadius; ++k) {
-          if (x + k >= 0 && x + k < width) s += window.w[k + kRadius] * row[x + k];
-        }
-      }
-      dst[x] = s;
+    for (int k = -kRadius; k <= kRadius; ++k) {
+      const double w = window.w[k + kRadius];
+      for (int x = std::max(0, -k); x < std::min(width, width - k); ++x) dst[x] += w * row[x + k];
     }
   }
-  // Vertical: whole rows at a time (vectorizes), taps in the same order as the horizontal pass.
+  // Vertical: the same, whole rows at a time.
   for (int y = 0; y < height; ++y) {
     double* dst = &out[std::size_t(y) * width];
     for (int k = -kRadius; k <= kRadius; ++k) {
