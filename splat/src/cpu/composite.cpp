@@ -56,11 +56,17 @@ Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
   return sp;
 }
 
-// Every visible splat packed, indexed by Gaussian id (culled ones are never read).
+// Every visible splat packed, indexed by Gaussian id (culled ones are never read). The table
+// lives in the calling thread's storage and is reused by its next call: at 1M Gaussians it is
+// 64 MB, which glibc would otherwise map, fault in and zero on every render. Each compositing
+// function packs at its start and is done with it on return (the pool's workers never call one),
+// so calls on one thread cannot overlap.
 template <typename T>
-std::vector<Splat<T>> pack_splats(const ForwardResultT<T>& f, ThreadPool& pool) {
+const std::vector<Splat<T>>& pack_splats(const ForwardResultT<T>& f, ThreadPool& pool) {
+  thread_local std::vector<Splat<T>> storage;
+  std::vector<Splat<T>>& out = storage;  // the caller's: the name alone means each worker's own
   const std::size_t n = f.gaussians.size();
-  std::vector<Splat<T>> out(n);
+  if (out.size() < n) out.resize(n);
   constexpr std::size_t kChunk = 4096;
   pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t c) {
     for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
@@ -186,7 +192,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   f.final_transmittance.assign(pixels, 1);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
-  const std::vector<Splat<T>> splats = pack_splats(f, pool);
+  const std::vector<Splat<T>>& splats = pack_splats(f, pool);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -278,7 +284,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
-  const std::vector<Splat<T>> splats = pack_splats(f, pool);
+  const std::vector<Splat<T>>& splats = pack_splats(f, pool);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -413,7 +419,7 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
   const int w = f.width, h = f.height;
   constexpr int kOut = 5;  // r, g, b, depth, alpha
   std::vector<T> out(static_cast<std::size_t>(w) * h * kOut * 6, T(0));
-  const std::vector<Splat<T>> splats = pack_splats(f, pool);
+  const std::vector<Splat<T>>& splats = pack_splats(f, pool);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
