@@ -276,11 +276,29 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
                                   ThreadPool& pool, std::vector<T>& scratch) {
   const int w = f.width, h = f.height;
   const std::size_t n = f.gaussians.size();
-  // Gradients per intersection (sorted position): every intersection belongs to one tile, so
-  // tiles write disjoint slots; the per-Gaussian sum below runs in a fixed order.
-  // Every slot of every tile is written below, so the reused buffer needs no clearing.
+  // Gradients per intersection: every intersection belongs to one tile, so tiles write disjoint
+  // slots, and the per-Gaussian sum below runs in a fixed order. Only a tile's intersections
+  // in front of its pixels' last contributors get gradients (often a third of them), so slots
+  // are kept for those alone: tile t's sorted positions [begin, used_end) map to slots from
+  // slot_start[t] on. Every kept slot is written below, so the reused buffer needs no clearing.
+  const std::size_t tiles = static_cast<std::size_t>(f.tiles_x) * f.tiles_y;
+  std::vector<uint32_t> used_end(tiles), slot_start(tiles + 1, 0);
+  pool.parallel_for(tiles, [&](std::size_t tile) {
+    const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
+    uint32_t end = f.tile_ranges[tile * 2];
+    for (int y = 0; y < geo.height; ++y)
+      for (int x = 0; x < geo.width; ++x)
+        end = std::max(end, f.last_contributor[static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x)]);
+    used_end[tile] = end;
+  });
+  for (std::size_t t = 0; t < tiles; ++t) {
+    slot_start[t + 1] = slot_start[t] + (used_end[t] - f.tile_ranges[t * 2]);
+  }
+  auto slot = [&](std::size_t tile, int64_t s) {
+    return (slot_start[tile] + static_cast<std::size_t>(s - f.tile_ranges[tile * 2])) * kSlots;
+  };
   std::vector<T>& isect = scratch;
-  if (isect.size() < f.sorted_ids.size() * kSlots) isect.resize(f.sorted_ids.size() * kSlots);
+  if (isect.size() < std::size_t(slot_start[tiles]) * kSlots) isect.resize(std::size_t(slot_start[tiles]) * kSlots);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
@@ -362,16 +380,13 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           lanes[kMy][x] += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
         }
       }
-      T* out = &isect[static_cast<std::size_t>(s) * kSlots];
+      T* out = &isect[slot(tile, s)];
       for (int k = 0; k < kSlots; ++k) {
         T sum = 0;
         for (int x = 0; x < kTile; ++x) sum += lanes[k][x];
         out[k] = sum;
       }
     }
-    // Splats behind every pixel's last contributor got no gradient.
-    std::fill(isect.begin() + std::max<int64_t>(max_last, begin) * kSlots,
-              isect.begin() + int64_t(f.tile_ranges[tile * 2 + 1]) * kSlots, T(0));
   });
 
   ScreenGrads<T> g;
@@ -385,20 +400,22 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   const std::size_t parts = static_cast<std::size_t>(pool.size());
   pool.parallel_for(parts, [&](std::size_t part) {
     const std::size_t id_begin = n * part / parts, id_end = n * (part + 1) / parts;
-    for (std::size_t s = 0; s < f.sorted_ids.size(); ++s) {
-      const std::size_t id = f.sorted_ids[s];
-      if (id < id_begin || id >= id_end) continue;
-      const T* in = &isect[s * kSlots];
-      g.means2d[id * 2] += in[kMx];
-      g.means2d[id * 2 + 1] += in[kMy];
-      g.conics[id * 3] += in[kCa];
-      g.conics[id * 3 + 1] += in[kCb];
-      g.conics[id * 3 + 2] += in[kCc];
-      g.opacities[id] += in[kOpacity];
-      g.colors[id * 3] += in[kR];
-      g.colors[id * 3 + 1] += in[kG];
-      g.colors[id * 3 + 2] += in[kB];
-      g.depths[id] += in[kZ];
+    for (std::size_t t = 0; t < tiles; ++t) {  // sorted order, skipping slots never kept
+      for (int64_t s = f.tile_ranges[t * 2]; s < used_end[t]; ++s) {
+        const std::size_t id = f.sorted_ids[static_cast<std::size_t>(s)];
+        if (id < id_begin || id >= id_end) continue;
+        const T* in = &isect[slot(t, s)];
+        g.means2d[id * 2] += in[kMx];
+        g.means2d[id * 2 + 1] += in[kMy];
+        g.conics[id * 3] += in[kCa];
+        g.conics[id * 3 + 1] += in[kCb];
+        g.conics[id * 3 + 2] += in[kCc];
+        g.opacities[id] += in[kOpacity];
+        g.colors[id * 3] += in[kR];
+        g.colors[id * 3 + 1] += in[kG];
+        g.colors[id * 3 + 2] += in[kB];
+        g.depths[id] += in[kZ];
+      }
     }
   });
   return g;
