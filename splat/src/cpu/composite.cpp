@@ -312,7 +312,6 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         behind_b[kTilePixels], behind_z[kTilePixels], v_r[kTilePixels], v_g[kTilePixels],
         v_b[kTilePixels], v_z[kTilePixels], v_final[kTilePixels];
     alignas(64) int32_t last[kTilePixels];
-    int32_t max_last = 0;
     int64_t row_max_last[kTile] = {};  // per row: one past the last splat any pixel used
     for (int p = 0; p < kTilePixels; ++p) {
       const int x = p % kTile, y = p / kTile;
@@ -331,11 +330,10 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
       v_final[p] = trans[p] * (grad_at(d_image.alpha, o) -
                                (bg[0] * v_r[p] + bg[1] * v_g[p] + bg[2] * v_b[p]));
       last[p] = static_cast<int32_t>(f.last_contributor[o]);
-      max_last = std::max(max_last, last[p]);
       row_max_last[y] = std::max<int64_t>(row_max_last[y], last[p]);
     }
     const uint32_t begin = f.tile_ranges[tile * 2];
-    for (int64_t s = int64_t(max_last) - 1; s >= int64_t(begin); --s) {
+    for (int64_t s = int64_t(used_end[tile]) - 1; s >= int64_t(begin); --s) {
       prefetch_splat(splats, f.sorted_ids, s - kPrefetchAhead);  // back to front
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
