@@ -4,6 +4,11 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include "cpu/stages.h"
 #include "shader_io.h"
@@ -27,9 +32,11 @@ struct alignas(64) Splat {
   T opacity;
   T r, g, b, z;   // colour and camera depth
   // alpha >= kAlphaMin needs sigma <= ln(opacity / kAlphaMin); `limit` adds kCullSlack to that.
-  // sigma <= limit is an ellipse reaching +-half_v rows above and below the mean.
-  T limit, det, half_v;
+  // sigma <= limit is an ellipse reaching +-half_v rows above and below the mean, with its top
+  // point at u = u_top; reach_rows also needs 2 c limit, det and 1 / c (no divide per tile).
+  T limit, det, half_v, u_top, cut_c, inv_cc;
 };
+static_assert(sizeof(Splat<float>) == 64, "one cache line per splat");
 
 // Culling keeps pixels down to alpha = exp(-kCullSlack) kAlphaMin, so that rounding in the
 // bounds below can never cull a pixel the pixel loop would blend.
@@ -53,6 +60,9 @@ Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
   // 0.5 d^T Q d <= limit reaches |dv| <= sqrt(2 limit (Q^-1)_yy); -1 marks "reaches nothing".
   const bool reaches = sp.limit > 0 && sp.det > 0 && sp.ca > 0 && sp.cc > 0;
   sp.half_v = reaches ? std::sqrt(2 * sp.limit * sp.ca / sp.det) : T(-1);
+  sp.u_top = reaches ? -sp.cb * sp.half_v / sp.ca : T(0);
+  sp.cut_c = 2 * sp.cc * sp.limit;
+  sp.inv_cc = reaches ? 1 / sp.cc : T(0);
   return sp;
 }
 
@@ -76,12 +86,14 @@ const std::vector<Splat<T>>& pack_splats(const ForwardResultT<T>& f, ThreadPool&
   return out;
 }
 
-// Splats are read in depth order, scattered over memory: fetch a few intersections ahead.
+// Splats are read in depth order, scattered over memory: fetch a few intersections ahead,
+// within the tile's list [lo, hi). Always inlined: GCC 12 finds a separate function whose only
+// effect is a prefetch "const" and deletes every call to it.
 inline constexpr int64_t kPrefetchAhead = 8;
 template <typename T>
-inline void prefetch_splat(const std::vector<Splat<T>>& splats, const std::vector<uint32_t>& ids,
-                           int64_t s) {
-  if (s >= 0 && s < static_cast<int64_t>(ids.size())) __builtin_prefetch(&splats[ids[s]]);
+[[gnu::always_inline]] inline void prefetch_splat(const Splat<T>* splats, const uint32_t* ids, int64_t s, int64_t lo,
+                           int64_t hi) {
+  if (s >= lo && s < hi) __builtin_prefetch(splats + ids[s]);
 }
 
 // The tile rows [y0, y1) in which some pixel can reach alpha >= kAlphaMin; the loops below
@@ -98,20 +110,15 @@ template <typename T>
 inline RowRange reach_rows(const Splat<T>& sp, int tile_x0, int tile_y0) {
   if (sp.half_v < 0) return {};
   const T u0 = T(tile_x0) + T(0.5) - sp.mx, u1 = u0 + T(kTile - 1);
-  const T u_top = -sp.cb * sp.half_v / sp.ca;  // the bottom point is (-u_top, -half_v)
-  // v where the line at u cuts the ellipse: (-b u +- sqrt(2 c limit - det u^2)) / c.
-  auto edge_cut = [&](T u_extreme, T sign, T& v) {
-    const T u = std::clamp(u_extreme, u0, u1);
-    if (u == u_extreme) {
-      v = sign * sp.half_v;
-      return true;
-    }
-    const T disc = 2 * sp.cc * sp.limit - sp.det * u * u;
-    v = (-sp.cb * u + sign * std::sqrt(std::max(disc, T(0)))) / sp.cc;
-    return disc >= 0;  // else the strip misses the ellipse altogether
-  };
-  T v_hi, v_lo;
-  if (!edge_cut(u_top, T(1), v_hi) || !edge_cut(-u_top, T(-1), v_lo)) return {};
+  // v where the line at u cuts the ellipse: (-b u +- sqrt(2 c limit - det u^2)) / c, or +-half_v
+  // where the extreme point lies in the strip (selects, not branches: they mispredict).
+  const T u_hi = std::clamp(sp.u_top, u0, u1), u_lo = std::clamp(-sp.u_top, u0, u1);
+  const bool top_in = u_hi == sp.u_top, bottom_in = u_lo == -sp.u_top;
+  const T disc_hi = sp.cut_c - sp.det * u_hi * u_hi, disc_lo = sp.cut_c - sp.det * u_lo * u_lo;
+  if (!((top_in || disc_hi >= 0) && (bottom_in || disc_lo >= 0))) return {};  // strip misses it
+  const T cut_hi = (-sp.cb * u_hi + std::sqrt(std::max(disc_hi, T(0)))) * sp.inv_cc;
+  const T cut_lo = (-sp.cb * u_lo - std::sqrt(std::max(disc_lo, T(0)))) * sp.inv_cc;
+  const T v_hi = top_in ? sp.half_v : cut_hi, v_lo = bottom_in ? -sp.half_v : cut_lo;
   // Row y (centre tile_y0 + y + 0.5) is inside when my + v_lo <= centre <= my + v_hi.
   const T lo = sp.my + v_lo - T(tile_y0) - T(0.5), hi = sp.my + v_hi - T(tile_y0) - T(0.5);
   return {static_cast<int>(std::clamp(std::ceil(lo), T(0), T(kTile))),
@@ -166,6 +173,20 @@ inline T blended(int32_t s, int32_t last, const PixelEval<T>& e) {  // int32: ha
   return alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
 }
 
+// Whether any of a row's lanes is positive. AVX-512 tests all 16 floats at once into a mask;
+// GCC 12 makes a max reduction over the pixel loop into a long chain of shuffles instead.
+inline bool any_positive(const float (&v)[kTile]) {
+#if defined(__AVX512F__)
+  static_assert(kTile == 16);
+  return _mm512_cmp_ps_mask(_mm512_load_ps(v), _mm512_setzero_ps(), _CMP_GT_OQ) != 0;
+#else
+  return std::any_of(std::begin(v), std::end(v), [](float x) { return x > 0; });
+#endif
+}
+inline bool any_positive(const double (&v)[kTile]) {
+  return std::any_of(std::begin(v), std::end(v), [](double x) { return x > 0; });
+}
+
 struct TileGeometry {
   int x0, y0;          // first pixel of the tile
   int width, height;   // pixels of the tile inside the image
@@ -211,7 +232,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
     int remaining = geo.width * geo.height;
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
     for (uint32_t s = begin; s < end && remaining > 0; ++s) {
-      prefetch_splat(splats, f.sorted_ids, int64_t(s) + kPrefetchAhead);
+      prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
       const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
@@ -226,8 +247,8 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         T* row_b = acc_b + y * kTile;
         T* row_z = acc_z + y * kTile;
         int32_t* row_last = last + y * kTile;
-        T any_stop = 0;
-#pragma omp simd reduction(max : any_stop)
+        alignas(64) T stops[kTile];
+#pragma omp simd
         for (int x = 0; x < kTile; ++x) {
           const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
           const T t = row_trans[x];
@@ -244,9 +265,9 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
           row_trans[x] = add > 0 ? next_t : t;
           row_last[x] = add > 0 ? next_last : row_last[x];
           row_done[x] += stop;
-          any_stop = std::max(any_stop, stop);
+          stops[x] = stop;
         }
-        if (any_stop == 0) continue;  // pixels finish rarely: count only when one did
+        if (!any_positive(stops)) continue;  // pixels finish rarely: count only when one did
         int live = 0;
         for (int x = 0; x < kTile; ++x) live += row_done[x] == 0;
         const int finished = row_live[y] - live;
@@ -334,7 +355,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
     const uint32_t begin = f.tile_ranges[tile * 2];
     for (int64_t s = int64_t(used_end[tile]) - 1; s >= int64_t(begin); --s) {
-      prefetch_splat(splats, f.sorted_ids, s - kPrefetchAhead);  // back to front
+      prefetch_splat(splats.data(), f.sorted_ids.data(), s - kPrefetchAhead, begin, s);  // back to front
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
@@ -461,7 +482,7 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
     int64_t max_last = 0;
     for (int y = 0; y < kTile; ++y) max_last = std::max(max_last, row_max_last[y]);
     for (int64_t s = f.tile_ranges[tile * 2]; s < max_last; ++s) {
-      prefetch_splat(splats, f.sorted_ids, s + kPrefetchAhead);
+      prefetch_splat(splats.data(), f.sorted_ids.data(), s + kPrefetchAhead, s, max_last);
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
