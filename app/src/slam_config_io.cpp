@@ -30,6 +30,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(t, "depth_sigma", c.tracking.depth_sigma);
       get(t, "color_sigma", c.tracking.color_sigma);
       get(t, "color_weight", c.tracking.color_weight);
+      get(t, "color_max_factor", c.tracking.color_max_factor);
       get(t, "alpha_threshold", c.tracking.alpha_threshold);
     }
     if (j.contains("mapping")) {

@@ -15,6 +15,7 @@ void TrackingConfig::validate() const {
   for (int f : pyramid) if (f < 1) fail("pyramid factors must be >= 1");
   if (!(depth_sigma > 0) || !(color_sigma > 0) || !(huber > 0)) fail("depth_sigma, color_sigma and huber must be positive");
   if (!(color_weight >= 0)) fail("color_weight must be >= 0");
+  if (color_max_factor < 1) fail("color_max_factor must be >= 1");
   if (!(alpha_threshold >= 0 && alpha_threshold < 1)) fail("alpha_threshold must be in [0, 1)");
 }
 
@@ -145,14 +146,16 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
   result.T_cam_world = initial;
   for (std::size_t level = 0; level < config.pyramid.size(); ++level) {
     const splat::RgbdFrame scaled = splat::downsample(frame, config.pyramid[level]);
+    TrackingConfig level_config = config;
+    if (config.pyramid[level] > config.color_max_factor) level_config.color_weight = 0;
     auto render_at = [&](const Eigen::Isometry3d& pose) {
       ++result.renders;
       return rasterizer.forward(map, splat::posed(scaled.camera, pose), splat::images_only());
     };
-    if (level == 0) warm_up(rasterizer, map, scaled, config, result);
+    if (level == 0) warm_up(rasterizer, map, scaled, level_config, result);
     splat::ForwardResult render = render_at(result.T_cam_world);
     std::vector<float> jacobian = rasterizer.pose_jacobian(render);
-    Linearization lin = linearize(render, &jacobian, scaled, config);
+    Linearization lin = linearize(render, &jacobian, scaled, level_config);
     double lambda = 1e-4;  // Levenberg-Marquardt damping, relative to diag(H)
     for (int it = 0; it < config.iterations[level] && lin.overlap > 0; ++it) {
       Matrix6d damped = lin.h;
@@ -161,7 +164,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * result.T_cam_world);
       splat::ForwardResult next = render_at(candidate);
-      const double next_cost = linearize(next, nullptr, scaled, config, &lin.use).cost;
+      const double next_cost = linearize(next, nullptr, scaled, level_config, &lin.use).cost;
       if (next_cost < lin.cost) {
         result.T_cam_world = candidate;
         ++result.iterations;
@@ -170,7 +173,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
                            delta.tail<3>().norm() < config.min_step_rotation;
         render = std::move(next);
         jacobian = rasterizer.pose_jacobian(render);
-        lin = linearize(render, &jacobian, scaled, config);
+        lin = linearize(render, &jacobian, scaled, level_config);
         if (small) break;
       } else {
         lambda *= 8;  // rejected: trust the linearization less
