@@ -45,9 +45,13 @@ int run_reconstruct(const ReconstructOptions& o) {
     outputs.add(record, loading_ms);
     progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes_added()) + " keyframes");
     const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
-    if ((i + 1) % every == 0) outputs.checkpoint(slam.map(), slam.keyframes_added(), (i + 1) % (5 * every) == 0);
+    if ((i + 1) % every == 0) {
+      outputs.update_poses(slam.trajectory());
+      outputs.checkpoint(slam.map(), slam.keyframes_added(), (i + 1) % (5 * every) == 0);
+    }
   }
   progress.finish();
+  outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   if (config.refine_passes > 0 && slam.keyframes_added() > 0) {
     const std::size_t visits = slam.keyframes_added() * static_cast<std::size_t>(config.refine_passes);
     Progress refine_progress("refine", visits, "keyframe visits");

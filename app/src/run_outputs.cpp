@@ -52,6 +52,16 @@ void RunOutputs::add(const FrameRecord& record, double loading_ms) {
   trajectory_.push_back({record.timestamp, record.T_world_cam});
 }
 
+void RunOutputs::update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam) {
+  if (T_world_cam.size() != records_.size()) {
+    throw splat::Error("update_poses: " + std::to_string(T_world_cam.size()) + " poses for " +
+                       std::to_string(records_.size()) + " frames");
+  }
+  for (std::size_t i = 0; i < records_.size(); ++i) {
+    records_[i].T_world_cam = trajectory_[i].T_world_cam = T_world_cam[i];
+  }
+}
+
 nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes,
                                    bool complete) const {
   const double seconds = elapsed_seconds();

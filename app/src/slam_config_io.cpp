@@ -41,6 +41,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "refine_resolution_factor", c.mapping.refine_resolution_factor);
       get(m, "seed_stride", c.mapping.seed.stride);
       get(m, "isotropic", c.mapping.isotropic);
+      get(m, "pose_learning_rate", c.mapping.pose_learning_rate);
+      get(m, "pose_rotation_learning_rate", c.mapping.pose_rotation_learning_rate);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());

@@ -4,7 +4,9 @@
 #include <cmath>
 
 #include "splat/error.h"
+#include "splat/adam.h"
 #include "splat/losses.h"
+#include "splat/se3.h"
 
 namespace mapping {
 
@@ -49,10 +51,10 @@ std::size_t Mapper::densify(const Keyframe& kf) {
 
 // The newest keyframe plus the stored ones whose cameras are closest in position and viewing
 // direction (a cheap covisibility score), up to the window size.
-std::vector<const Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) {
+std::vector<Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) {
   const Eigen::Isometry3d newest_world = newest.T_cam_world.inverse();
-  std::vector<std::pair<double, const Keyframe*>> scored;
-  for (const Keyframe& kf : keyframes_) {
+  std::vector<std::pair<double, Keyframe*>> scored;
+  for (Keyframe& kf : keyframes_) {
     if (&kf == &newest) continue;
     const Eigen::Isometry3d world = kf.T_cam_world.inverse();
     const double distance = (world.translation() - newest_world.translation()).norm();
@@ -60,7 +62,7 @@ std::vector<const Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) 
     scored.emplace_back(distance + 0.5 * angle, &kf);  // 0.5 m per radian
   }
   std::sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<const Keyframe*> window = {&newest};
+  std::vector<Keyframe*> window = {&keyframes_.back()};
   for (const auto& [score, kf] : scored) {
     if (window.size() >= static_cast<std::size_t>(config_.window)) break;
     window.push_back(kf);
@@ -68,7 +70,7 @@ std::vector<const Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) 
   return window;
 }
 
-double Mapper::optimize_step(const Keyframe& kf) {
+double Mapper::optimize_step(Keyframe& kf, bool move_pose) {
   const splat::RgbdFrame& f = kf.frame;
   const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
   splat::ImageGrads d;
@@ -78,8 +80,22 @@ double Mapper::optimize_step(const Keyframe& kf) {
   if (config_.ssim_weight > 0) {
     loss += splat::dssim_loss<float>(render.rgb, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
-  loss += splat::depth_l1_loss<float>(render.depth, f.depth, {}, d.depth, config_.depth_weight);
-  splat::GaussianGrads grads = rasterizer_.backward(render, d).d_gaussians;
+  d.alpha.assign(render.alpha.size(), 0.f);
+  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, config_.depth_alpha_threshold, d.depth,
+                                                 d.alpha, config_.depth_weight);
+  splat::BackwardResult backward = rasterizer_.backward(render, d);
+  if (move_pose && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0) && kf.number > 0) {
+    const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
+    const double t = ++kf.pose_steps;
+    splat::Vector6d delta = splat::Vector6d::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const double rate = k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate;
+      splat::adam_update(delta[k], backward.d_loss_d_pose[k], kf.pose_m[k], kf.pose_v[k], rate,
+                         1 - std::pow(hyper.beta1, t), 1 - std::pow(hyper.beta2, t), hyper);
+    }
+    kf.T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * kf.T_cam_world);
+  }
+  splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {
     // The three log scales move together (they start equal) and rotations stay fixed.
     for (std::size_t i = 0; i < grads.size(); ++i) {
@@ -114,24 +130,30 @@ std::size_t Mapper::prune() {
 
 double Mapper::refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, int iterations) {
   if (map_.empty()) return 0;
-  const Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
+  Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
   double loss = 0;
-  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf);
+  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, false);
   return loss;
+}
+
+std::vector<std::pair<std::size_t, Eigen::Isometry3d>> Mapper::keyframe_poses() const {
+  std::vector<std::pair<std::size_t, Eigen::Isometry3d>> poses;
+  for (const Keyframe& kf : keyframes_) poses.emplace_back(kf.number, kf.T_cam_world);
+  return poses;
 }
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {
   MappingStats stats;
-  keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world});
-  const Keyframe& newest = keyframes_.back();
+  keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
+  Keyframe& newest = keyframes_.back();
   stats.added = densify(newest);
-  const std::vector<const Keyframe*> window = window_for(newest);
+  const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();
   // Half the steps on the new keyframe, the rest spread over the window at random.
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
   for (int it = 0; it < config_.iterations && !map_.empty(); ++it) {
-    const Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
-    stats.final_loss = optimize_step(kf);
+    Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
+    stats.final_loss = optimize_step(kf, true);
     ++stats.iterations;
   }
   stats.pruned = prune();

@@ -51,6 +51,34 @@ TEST(Losses, GradientsMatchFiniteDifferences) {
   check_loss("depth_l1", depth, [&](auto p, auto g) { return splat::depth_l1_loss<double>(p, depth.target, depth.mask, g); });
 }
 
+// The depth-and-silhouette loss in both of its inputs: depth D (pred) and alpha A, with pixels
+// on both sides of the threshold and kept clear of it (a step there is not differentiable).
+TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
+  Images depth = random_images(7, 1);
+  std::vector<double> alpha;
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> low(0.2, 0.8), high(0.96, 0.999);
+  for (std::size_t p = 0; p < depth.pred.size(); ++p) alpha.push_back(p % 3 == 0 ? low(rng) : high(rng));
+  for (std::size_t i = 0; i < depth.target.size(); i += 5) depth.target[i] = 0;  // no measurement
+  constexpr double kThreshold = 0.9;
+  auto loss = [&](std::span<double> g_depth, std::span<double> g_alpha) {
+    return splat::silhouette_depth_l1_loss<double>(depth.pred, alpha, depth.target, kThreshold, g_depth, g_alpha, 0.8);
+  };
+  const std::size_t n = depth.pred.size();
+  std::vector<double> g_depth(n, 0.0), g_alpha(n, 0.0), scratch_d(n), scratch_a(n);
+  loss(g_depth, g_alpha);
+  auto value = [&] { return std::vector<double>{loss(scratch_d, scratch_a)}; };
+  gslam::test::expect_gradients_match("silhouette_depth d/dD", g_depth, [&](std::size_t i, double d) { depth.pred[i] += d; }, value);
+  gslam::test::expect_gradients_match("silhouette_depth d/dA", g_alpha, [&](std::size_t i, double d) { alpha[i] += d; }, value);
+  // Known value: normalized above the threshold, raw below; unmeasured pixels ignored.
+  const std::vector<float> d = {1.0f, 1.0f, 2.0f}, a = {0.5f, 0.95f, 1.0f}, t = {0.8f, 1.0f, 0.f};
+  std::vector<float> gd(3, 0.f), ga(3, 0.f);
+  const double expected = (std::abs(1.0 - 0.8) + std::abs(1.0 / 0.95 - 1.0)) / 2;
+  EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga), expected, 1e-6);
+  EXPECT_EQ(ga[0], 0.f) << "below the threshold alpha gets no gradient";
+  EXPECT_EQ(gd[2], 0.f) << "no measurement, no gradient";
+}
+
 TEST(Losses, KnownValues) {
   const std::vector<float> pred = {0.5f, 0.5f, 1.0f, 0.0f}, target = {0.25f, 0.5f, 0.5f, 0.0f};
   std::vector<float> grad(4, 0.f);

@@ -23,6 +23,8 @@ class RunOutputs {
 
   // Records one processed frame.
   void add(const FrameRecord& record, double loading_ms);
+  // Replaces the recorded poses (one per frame added, in order) with later estimates.
+  void update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam);
   // Extra summary fields (live mode: dropped frames, latency percentiles).
   nlohmann::json& extra() { return extra_; }
   // Writes trajectory.txt and summary.json (complete: false), and map.ply when `with_map`.

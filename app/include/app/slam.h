@@ -80,12 +80,25 @@ class SlamSystem {
   std::size_t refine_map(const std::vector<FrameRecord>& records,
                          const std::function<splat::RgbdFrame(std::size_t)>& load,
                          const std::function<void(std::size_t, std::size_t)>& visited = {});
+  // Camera-to-world poses of every frame processed so far. Mapping may move keyframes
+  // (MapperConfig::pose_learning_rate); each frame follows the keyframe it was tracked after.
+  std::vector<Eigen::Isometry3d> trajectory() const;
 
  private:
+  // A frame's pose relative to the keyframe before it (or itself).
+  struct Anchor {
+    std::size_t keyframe;
+    Eigen::Isometry3d T_keyframe_cam;
+  };
+  FrameRecord track_and_map(const splat::RgbdFrame& frame);
+  void sync_keyframe_poses();
+
   SlamConfig config_;
   FrameTracker tracker_;
   mapping::Mapper mapper_;
   std::size_t keyframes_ = 0;
+  std::vector<Eigen::Isometry3d> keyframe_world_;  // T_world_cam per keyframe number
+  std::vector<Anchor> anchors_;                    // per frame
 };
 
 }  // namespace app

@@ -19,6 +19,10 @@ struct MapperConfig {
   int window = 4;             // keyframes per optimization window (the new one included)
   std::size_t max_keyframes = 12;  // stored keyframes; the least covisible is dropped beyond
   double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
+  // Depth is compared as D/A where the rendered silhouette A exceeds this, as D elsewhere
+  // (splat::silhouette_depth_l1_loss). Synthetic room, 30 frames, keyframe poses refined:
+  // ATE 0.54 cm comparing D everywhere, 0.31 cm with this.
+  double depth_alpha_threshold = 0.95;
   // Keep Gaussians isotropic (one scale, no rotation), as SplaTAM does. Off by default: on the
   // first 60 teddy frames anisotropic maps rendered better (24.6 vs 23.9 dB masked PSNR).
   bool isotropic = false;
@@ -31,6 +35,10 @@ struct MapperConfig {
   double prune_opacity = 0.005;
   double prune_max_scale = 0.5;  // metres
   AdamConfig adam;
+  // Keyframe poses move with the map in the window optimization (Adam on se(3), left updates,
+  // these step sizes in metres and radians); the first keyframe stays fixed as the world
+  // frame. 0 keeps every keyframe where tracking put it.
+  double pose_learning_rate = 0, pose_rotation_learning_rate = 0;
   uint32_t random_seed = 1;
   void validate() const;
 };
@@ -61,21 +69,29 @@ class Mapper {
 
   const splat::Gaussians& map() const { return map_; }
   std::size_t keyframes() const { return keyframes_.size(); }
+  // The stored keyframes' current poses, each with its number in the order they were added.
+  std::vector<std::pair<std::size_t, Eigen::Isometry3d>> keyframe_poses() const;
 
  private:
   struct Keyframe {
     splat::RgbdFrame frame;  // at the mapping resolution
     Eigen::Isometry3d T_cam_world;
+    std::size_t number = 0;  // in the order added; 0 is the world frame
+    // Adam state of the pose.
+    Eigen::Matrix<double, 6, 1> pose_m = Eigen::Matrix<double, 6, 1>::Zero(), pose_v = pose_m;
+    int pose_steps = 0;
   };
   std::size_t densify(const Keyframe& kf);
-  std::vector<const Keyframe*> window_for(const Keyframe& newest);
-  double optimize_step(const Keyframe& kf);
+  std::vector<Keyframe*> window_for(const Keyframe& newest);
+  // One Adam step of the map on a keyframe, and of its pose when `move_pose`.
+  double optimize_step(Keyframe& kf, bool move_pose);
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
   splat::Gaussians map_;
   GaussianAdam adam_;
   std::deque<Keyframe> keyframes_;
+  std::size_t added_ = 0;
   std::mt19937 rng_;
 };
 

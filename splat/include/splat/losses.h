@@ -24,6 +24,17 @@ template <typename T>
 double depth_l1_loss(std::span<const T> pred, std::span<const T> target, std::span<const T> mask,
                      std::span<T> grad, double weight = 1.0);
 
+// Depth L1 over pixels with a measurement, mean |pred - target|, where pred is the
+// alpha-normalized depth D / A where the silhouette A exceeds alpha_threshold and the
+// alpha-weighted D elsewhere. D reads short wherever A < 1, a bias that pulls camera poses
+// along their axis; D / A has none, while D on thin silhouettes still grows coverage.
+// Adds the gradients with respect to D (ForwardResult::depth) and A to grad_depth, grad_alpha.
+template <typename T>
+double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alpha,
+                                std::span<const T> target, double alpha_threshold,
+                                std::span<T> grad_depth, std::span<T> grad_alpha,
+                                double weight = 1.0);
+
 // 1 - SSIM, SSIM averaged over pixels and channels, with an 11x11 Gaussian window (sigma 1.5),
 // zero padding at the borders and C1 = 0.01^2, C2 = 0.03^2 (the 3DGS training loss).
 template <typename T>
