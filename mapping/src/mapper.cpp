@@ -15,6 +15,8 @@ void MapperConfig::validate() const {
   if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
   if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
   if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
+  if (!(depth_alpha_threshold >= 0 && depth_alpha_threshold <= 1)) fail("depth_alpha_threshold must be in [0, 1]");
+  if (!(pose_learning_rate >= 0 && pose_rotation_learning_rate >= 0)) fail("pose learning rates must be >= 0");
 }
 
 Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)
