@@ -24,9 +24,9 @@ SlamConfig::SlamConfig() {
   mapping.seed.scale_factor = 0.6;
   // Keyframe poses move with the map (ATE, teddy 193 frames / synthetic room 30 frames):
   // fixed 3.08 / 0.39 cm; rotation steps of 0, 2e-5 and 5e-5 rad with 2e-4 m translation
-  // steps 0.93 / 0.78, 1.03 / 0.48 and 1.23 / 0.31 cm. The last improves both. Teddy's PSNR
-  // falls from 22.4 to 20.5-21.5 dB with any of them. Comparing the alpha-weighted depth
-  // everywhere (depth_alpha_threshold 1) gave teddy 1.29 cm / 22.3 dB but synthetic 0.54 cm.
+  // steps 0.93 / 0.78, 1.03 / 0.48 and 1.24 / 0.31 cm. The last improves both; teddy's PSNR
+  // goes 22.4 -> 22.1 dB. Comparing the alpha-weighted depth everywhere in the window steps
+  // too (depth_alpha_threshold 1) gave teddy 1.29 cm but synthetic 0.54 cm.
   mapping.pose_learning_rate = 2e-4;
   mapping.pose_rotation_learning_rate = 5e-5;
   // Teddy, first 100 frames: PSNR 20.3 -> 24.0 dB (SSIM 0.78 -> 0.85) for 14 s; 8 passes gave

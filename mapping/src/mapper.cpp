@@ -15,7 +15,9 @@ void MapperConfig::validate() const {
   if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
   if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
   if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
-  if (!(depth_alpha_threshold >= 0 && depth_alpha_threshold <= 1)) fail("depth_alpha_threshold must be in [0, 1]");
+  for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
+    if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
+  }
   if (!(pose_learning_rate >= 0 && pose_rotation_learning_rate >= 0)) fail("pose learning rates must be >= 0");
 }
 
@@ -72,7 +74,7 @@ std::vector<Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) {
   return window;
 }
 
-double Mapper::optimize_step(Keyframe& kf, bool move_pose) {
+double Mapper::optimize_step(Keyframe& kf, Step step) {
   const splat::RgbdFrame& f = kf.frame;
   const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
   splat::ImageGrads d;
@@ -83,10 +85,11 @@ double Mapper::optimize_step(Keyframe& kf, bool move_pose) {
     loss += splat::dssim_loss<float>(render.rgb, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
   d.alpha.assign(render.alpha.size(), 0.f);
-  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, config_.depth_alpha_threshold, d.depth,
-                                                 d.alpha, config_.depth_weight);
+  const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
+  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
+                                                 config_.depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
-  if (move_pose && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0) && kf.number > 0) {
+  if (step == Step::kWindow && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0) && kf.number > 0) {
     const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
     const double t = ++kf.pose_steps;
     splat::Vector6d delta = splat::Vector6d::Zero();
@@ -134,7 +137,7 @@ double Mapper::refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_
   if (map_.empty()) return 0;
   Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
   double loss = 0;
-  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, false);
+  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine);
   return loss;
 }
 
@@ -155,7 +158,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
   for (int it = 0; it < config_.iterations && !map_.empty(); ++it) {
     Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
-    stats.final_loss = optimize_step(kf, true);
+    stats.final_loss = optimize_step(kf, Step::kWindow);
     ++stats.iterations;
   }
   stats.pruned = prune();
