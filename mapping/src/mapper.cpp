@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "splat/error.h"
 #include "splat/adam.h"
+#include "splat/error.h"
 #include "splat/losses.h"
 #include "splat/se3.h"
 
@@ -55,7 +55,7 @@ std::size_t Mapper::densify(const Keyframe& kf) {
 
 // The newest keyframe plus the stored ones whose cameras are closest in position and viewing
 // direction (a cheap covisibility score), up to the window size.
-std::vector<Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) {
+std::vector<Mapper::Keyframe*> Mapper::window_for(Keyframe& newest) {
   const Eigen::Isometry3d newest_world = newest.T_cam_world.inverse();
   std::vector<std::pair<double, Keyframe*>> scored;
   for (Keyframe& kf : keyframes_) {
@@ -66,12 +66,26 @@ std::vector<Mapper::Keyframe*> Mapper::window_for(const Keyframe& newest) {
     scored.emplace_back(distance + 0.5 * angle, &kf);  // 0.5 m per radian
   }
   std::sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<Keyframe*> window = {&keyframes_.back()};
+  std::vector<Keyframe*> window = {&newest};
   for (const auto& [score, kf] : scored) {
     if (window.size() >= static_cast<std::size_t>(config_.window)) break;
     window.push_back(kf);
   }
   return window;
+}
+
+void Mapper::step_pose(Keyframe& kf, const splat::PoseGradient& gradient) {
+  const bool moves = config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0;
+  if (!moves || kf.number == 0) return;  // the first keyframe is the world frame
+  const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
+  const double t = ++kf.pose_steps;
+  splat::Vector6d delta = splat::Vector6d::Zero();
+  for (int k = 0; k < 6; ++k) {
+    const double rate = k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate;
+    splat::adam_update(delta[k], gradient[k], kf.pose_m[k], kf.pose_v[k], rate, 1 - std::pow(hyper.beta1, t),
+                       1 - std::pow(hyper.beta2, t), hyper);
+  }
+  kf.T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * kf.T_cam_world);
 }
 
 double Mapper::optimize_step(Keyframe& kf, Step step) {
@@ -89,17 +103,7 @@ double Mapper::optimize_step(Keyframe& kf, Step step) {
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
                                                  config_.depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
-  if (step == Step::kWindow && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0) && kf.number > 0) {
-    const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
-    const double t = ++kf.pose_steps;
-    splat::Vector6d delta = splat::Vector6d::Zero();
-    for (int k = 0; k < 6; ++k) {
-      const double rate = k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate;
-      splat::adam_update(delta[k], backward.d_loss_d_pose[k], kf.pose_m[k], kf.pose_v[k], rate,
-                         1 - std::pow(hyper.beta1, t), 1 - std::pow(hyper.beta2, t), hyper);
-    }
-    kf.T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * kf.T_cam_world);
-  }
+  if (step == Step::kWindow) step_pose(kf, backward.d_loss_d_pose);
   splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {
     // The three log scales move together (they start equal) and rotations stay fixed.

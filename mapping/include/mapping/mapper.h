@@ -85,11 +85,13 @@ class Mapper {
     int pose_steps = 0;
   };
   std::size_t densify(const Keyframe& kf);
-  std::vector<Keyframe*> window_for(const Keyframe& newest);
+  std::vector<Keyframe*> window_for(Keyframe& newest);
   // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose;
   // refinement steps keep it and use refine_depth_alpha_threshold.
   enum class Step { kWindow, kRefine };
   double optimize_step(Keyframe& kf, Step step);
+  // One Adam step of a keyframe's pose (se(3), left update) from the loss's pose gradient.
+  void step_pose(Keyframe& kf, const splat::PoseGradient& gradient);
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
