@@ -30,6 +30,20 @@ std::vector<app::StampedPose> track(splat::Rasterizer& rasterizer, const app::Da
   return estimate;
 }
 
+// The bundled synthetic room, `frames` long, written under `dir`.
+app::Dataset synthetic_dataset(const gslam::test::TempDir& dir, int frames) {
+  app::SyntheticOptions o;
+  o.frames = frames;
+  app::write_synthetic_sequence(dir / "seq", o);
+  return app::open_dataset(dir / "seq");
+}
+
+std::vector<app::FrameRecord> process_all(app::SlamSystem& slam, const app::Dataset& dataset) {
+  std::vector<app::FrameRecord> records;
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) records.push_back(slam.process(dataset.load(i)));
+  return records;
+}
+
 app::TrajectoryErrors reconstruct(const app::Dataset& dataset, std::size_t& failures) {
   auto rasterizer = splat::make_cpu_rasterizer();
   std::vector<app::StampedPose> truth;
@@ -43,10 +57,7 @@ TEST(SlamSystem, VulkanAndCpuBackendsGiveTheSameTrajectoryWithinOneMillimetre) {
   GSLAM_REQUIRE_BACKEND(cpu, "cpu");
   GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
   gslam::test::TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 8;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = synthetic_dataset(dir, 8);
   std::vector<app::StampedPose> truth_cpu, truth_gpu;
   std::size_t failures_cpu = 0, failures_gpu = 0;
   const auto a = track(cpu, dataset, truth_cpu, failures_cpu);
@@ -65,11 +76,8 @@ TEST(SlamSystem, VulkanAndCpuBackendsGiveTheSameTrajectoryWithinOneMillimetre) {
 
 TEST(SlamSystem, SyntheticRoomTrajectoryWithinOneCentimetre) {
   gslam::test::TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 30;
-  app::write_synthetic_sequence(dir / "seq", o);
   std::size_t failures = 0;
-  const app::TrajectoryErrors e = reconstruct(app::open_dataset(dir / "seq"), failures);
+  const app::TrajectoryErrors e = reconstruct(synthetic_dataset(dir, 30), failures);
   std::printf("synthetic: ATE %.2f cm over %zu frames\n", e.ate_rmse * 100, e.matched);
   EXPECT_EQ(failures, 0u);
   EXPECT_LT(e.ate_rmse, 0.01);
@@ -79,18 +87,14 @@ TEST(SlamSystem, SyntheticRoomTrajectoryWithinOneCentimetre) {
 // defines the world frame; with both rates 0 every frame keeps its tracked pose.
 TEST(SlamSystem, MappingMovesKeyframesButNeverTheFirst) {
   gslam::test::TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 12;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = synthetic_dataset(dir, 12);
   auto rasterizer = splat::make_cpu_rasterizer();
   ASSERT_GT(app::SlamConfig{}.mapping.pose_learning_rate, 0) << "the default moves keyframes";
   for (const bool move : {true, false}) {
     app::SlamConfig config;
     if (!move) config.mapping.pose_learning_rate = config.mapping.pose_rotation_learning_rate = 0;
     app::SlamSystem slam(*rasterizer, config);
-    std::vector<app::FrameRecord> records;
-    for (std::size_t i = 0; i < dataset.entries.size(); ++i) records.push_back(slam.process(dataset.load(i)));
+    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
     const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
     ASSERT_EQ(poses.size(), records.size());
     EXPECT_TRUE(poses[0].isApprox(Eigen::Isometry3d::Identity(), 0)) << "the first keyframe moved";
@@ -137,16 +141,12 @@ double mean_psnr(splat::Rasterizer& rasterizer, const app::SlamSystem& slam, con
 // to regions earlier keyframes saw: the whole sequence renders better afterwards.
 TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   gslam::test::TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 20;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = synthetic_dataset(dir, 20);
   auto rasterizer = splat::make_cpu_rasterizer();
   const app::SlamConfig config;
   ASSERT_GT(config.refine_passes, 0);
   app::SlamSystem slam(*rasterizer, config);
-  std::vector<app::FrameRecord> records;
-  for (std::size_t i = 0; i < dataset.entries.size(); ++i) records.push_back(slam.process(dataset.load(i)));
+  const std::vector<app::FrameRecord> records = process_all(slam, dataset);
   const double before = mean_psnr(*rasterizer, slam, dataset, records);
   std::size_t visits = 0, total = 0;
   slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); },

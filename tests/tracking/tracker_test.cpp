@@ -58,6 +58,16 @@ class DonutTracking : public ::testing::Test {
     return splat::se3_exp(delta) * truth_;
   }
 
+  // Tracks from `start` and expects the bound: < 1 mm and < 0.05 deg.
+  void expect_converges(const Eigen::Isometry3d& start, const tracking::TrackingConfig& config, const char* label) {
+    const tracking::TrackingResult r = tracking::track_frame(*rasterizer_, map_, frame_, start, config);
+    const PoseError after = pose_error(r.T_cam_world, truth_);
+    EXPECT_TRUE(r.converged) << r.reason;
+    EXPECT_LT(after.translation_m, 1e-3) << "renders " << r.renders;
+    EXPECT_LT(after.rotation_deg, 0.05) << "renders " << r.renders;
+    std::printf("%s: %.4f mm, %.5f deg after %d renders\n", label, after.translation_m * 1e3, after.rotation_deg, r.renders);
+  }
+
   std::unique_ptr<splat::Rasterizer> rasterizer_ = splat::make_cpu_rasterizer();
   splat::Gaussians map_;
   splat::RgbdFrame frame_;
@@ -82,12 +92,7 @@ TEST_F(DonutTracking, ConvergesFromThreeCentimetresAndTwoDegrees) {
   ASSERT_GT(before.translation_m, 0.029);
   tracking::TrackingConfig config;
   config.warmup_iterations = 20;  // 3 cm is ~35 px here: wider than Gauss-Newton's basin
-  const tracking::TrackingResult r = tracking::track_frame(*rasterizer_, map_, frame_, start, config);
-  const PoseError after = pose_error(r.T_cam_world, truth_);
-  EXPECT_TRUE(r.converged) << r.reason;
-  EXPECT_LT(after.translation_m, 1e-3) << "renders " << r.renders;
-  EXPECT_LT(after.rotation_deg, 0.05) << "renders " << r.renders;
-  std::printf("3 cm / 2 deg: %.3f mm, %.4f deg after %d renders\n", after.translation_m * 1e3, after.rotation_deg, r.renders);
+  expect_converges(start, config, "3 cm / 2 deg");
 }
 
 TEST_F(DonutTracking, ConvergesFromTenCentimetresAndTenDegreesCoarseToFine) {
@@ -103,12 +108,7 @@ TEST_F(DonutTracking, ConvergesFromTenCentimetresAndTenDegreesCoarseToFine) {
   config.pyramid = {16, 8, 4, 2, 1};
   config.iterations = {10, 10, 8, 6, 4};
   config.color_max_factor = 4;
-  const tracking::TrackingResult r = tracking::track_frame(*rasterizer_, map_, frame_, start, config);
-  const PoseError after = pose_error(r.T_cam_world, truth_);
-  EXPECT_TRUE(r.converged) << r.reason;
-  EXPECT_LT(after.translation_m, 1e-3) << "renders " << r.renders;
-  EXPECT_LT(after.rotation_deg, 0.05) << "renders " << r.renders;
-  std::printf("10 cm / 10 deg: %.4f mm, %.5f deg after %d renders\n", after.translation_m * 1e3, after.rotation_deg, r.renders);
+  expect_converges(start, config, "10 cm / 10 deg");
 }
 
 }  // namespace
