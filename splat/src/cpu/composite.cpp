@@ -175,17 +175,17 @@ inline T blended(int32_t s, int32_t last, const PixelEval<T>& e) {  // int32: ha
 
 // Whether any of a row's lanes is positive. AVX-512 tests all 16 floats at once into a mask;
 // GCC 12 makes a max reduction over the pixel loop into a long chain of shuffles instead.
-inline bool any_positive(const float (&v)[kTile]) {
+template <typename T>
+inline bool any_positive(const T (&v)[kTile]) {
+  return std::any_of(std::begin(v), std::end(v), [](T x) { return x > 0; });
+}
 #if defined(__AVX512F__)
+template <>
+inline bool any_positive(const float (&v)[kTile]) {
   static_assert(kTile == 16);
   return _mm512_cmp_ps_mask(_mm512_load_ps(v), _mm512_setzero_ps(), _CMP_GT_OQ) != 0;
-#else
-  return std::any_of(std::begin(v), std::end(v), [](float x) { return x > 0; });
+}
 #endif
-}
-inline bool any_positive(const double (&v)[kTile]) {
-  return std::any_of(std::begin(v), std::end(v), [](double x) { return x > 0; });
-}
 
 struct TileGeometry {
   int x0, y0;          // first pixel of the tile
