@@ -29,7 +29,9 @@ splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not)
     std::string why_not;
   };
   static std::mutex mutex;
-  static std::map<std::string, Entry> cache;
+  // Never destroyed: at exit, a GPU driver loaded after this map was built may already have
+  // run its own teardown, and destroying a device then crashes (seen with NVIDIA's driver).
+  static auto& cache = *new std::map<std::string, Entry>;
   std::lock_guard lock(mutex);
   auto it = cache.find(name);
   if (it == cache.end()) {
@@ -42,6 +44,7 @@ splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not)
       } else if (name == "vulkan_portable") {
         splat::VulkanOptions options;
         options.float_atomics = false;
+        options.map_device_memory = false;
         entry.rasterizer = splat::make_vulkan_rasterizer(options);
       } else {
         entry.why_not = "unknown backend";

@@ -14,7 +14,8 @@ std::vector<std::string> backend_names();
 
 // One rasterizer per backend for the whole test process (creating Vulkan pipelines is slow),
 // or null with the reason when the backend cannot run here. Names: "cpu", "vulkan" (float
-// atomics where the device has them) and "vulkan_portable" (the portable reduction).
+// atomics where the device has them) and "vulkan_portable" (the portable reduction, and every
+// transfer through staging copies as on a discrete GPU, even where memory could be mapped).
 splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not);
 
 // Whether a missing Vulkan device fails tests instead of skipping them (GSLAM_REQUIRE_GPU_TESTS,

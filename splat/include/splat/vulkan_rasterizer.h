@@ -14,6 +14,11 @@ struct VulkanOptions {
   // Backward reduction: float atomics (VK_EXT_shader_atomic_float) where the device has them,
   // the fastest, or false for the portable one, which is also bit-for-bit deterministic.
   bool float_atomics = true;
+  // Let the host read and write device buffers in place where that memory is host-visible,
+  // coherent and cached (lavapipe, integrated GPUs). Elsewhere, and always when false, data
+  // moves through staging copies: host reads of a discrete GPU's mapped memory (resizable
+  // BAR) are uncached and cost more than rendering.
+  bool map_device_memory = true;
 };
 
 struct VulkanDeviceInfo {

@@ -20,19 +20,27 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept {
 void Buffer::reserve(std::size_t bytes) {
   if (bytes <= capacity_) return;
   const std::size_t grown = std::max<std::size_t>({bytes, capacity_ + capacity_ / 2, 256});
-  allocate(grown, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT,
-           VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  constexpr VkMemoryPropertyFlags kHostFriendly = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                                  VK_MEMORY_PROPERTY_HOST_COHERENT_BIT |
+                                                  VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+  if (context_->map_device_memory()) {
+    allocate(grown, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, kHostFriendly, kHostFriendly);
+  } else {
+    // The unmappable sentinel: no memory type has every bit set.
+    allocate(grown, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0, ~VkMemoryPropertyFlags(0));
+  }
 }
 
 void Buffer::reserve_staging(std::size_t bytes) {
   if (bytes <= capacity_) return;
   const std::size_t grown = std::max<std::size_t>({bytes, capacity_ + capacity_ / 2, 256});
-  allocate(grown, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-           VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+  constexpr VkMemoryPropertyFlags kHost =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  allocate(grown, kHost, VK_MEMORY_PROPERTY_HOST_CACHED_BIT, kHost);
 }
 
 void Buffer::allocate(std::size_t bytes, VkMemoryPropertyFlags required,
-                      VkMemoryPropertyFlags preferred) {
+                      VkMemoryPropertyFlags preferred, VkMemoryPropertyFlags map_when) {
   release();
   VkDevice device = context_->device();
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
@@ -56,9 +64,7 @@ void Buffer::allocate(std::size_t bytes, VkMemoryPropertyFlags required,
   vk_check(vkBindBufferMemory(device, buffer_, memory_, 0), "vkBindBufferMemory");
   capacity_ = bytes;
   context_->count_allocation(capacity_, false);
-  const VkMemoryPropertyFlags host =
-      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  if ((context_->memory_flags(type) & host) == host) {
+  if ((context_->memory_flags(type) & map_when) == map_when) {
     vk_check(vkMapMemory(device, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
   }
 }

@@ -1,6 +1,8 @@
 // A device storage buffer that grows on demand. Device-local memory; mapped persistently when
-// that memory is also host-visible and coherent (lavapipe, integrated GPUs, resizable BAR),
-// otherwise filled and read through staging copies (see CommandBatch).
+// that memory is also host-visible, coherent and cached (lavapipe, integrated GPUs) and the
+// context allows it, otherwise filled and read through staging copies (see CommandBatch).
+// A discrete GPU's host-visible VRAM (resizable BAR) is not mapped: host reads of it are
+// uncached, about 1000x slower than a staging copy.
 #pragma once
 #include <cstddef>
 
@@ -21,7 +23,8 @@ class Buffer {
   // Makes room for `bytes` (at least 256). Growing discards the contents; capacity grows by
   // half again so a slowly growing map does not reallocate every frame.
   void reserve(std::size_t bytes);
-  // Host-visible, coherent memory for staging copies (prefers cached memory for reads).
+  // Host-visible, coherent memory for staging copies (prefers cached memory for reads);
+  // always mapped.
   void reserve_staging(std::size_t bytes);
 
   VkBuffer handle() const { return buffer_; }
@@ -29,7 +32,9 @@ class Buffer {
   void* mapped() const { return mapped_; }  // null unless host-visible
 
  private:
-  void allocate(std::size_t bytes, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred);
+  // Maps the memory when its type has every flag in `map_when`.
+  void allocate(std::size_t bytes, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred,
+                VkMemoryPropertyFlags map_when);
   void release();
 
   Context* context_ = nullptr;

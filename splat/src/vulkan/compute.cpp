@@ -209,22 +209,27 @@ void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes) {
     std::memcpy(buffer.mapped(), data, bytes);
     return;
   }
-  auto& staging = staging_.emplace_back(std::make_unique<Buffer>(context_));
-  staging->reserve_staging(bytes);
-  std::memcpy(staging->mapped(), data, bytes);
-  copy(*staging, buffer, bytes);
+  Buffer& staging = next_staging(bytes);
+  std::memcpy(staging.mapped(), data, bytes);
+  copy(staging, buffer, bytes);
 }
 
 void CommandBatch::download(const Buffer& buffer, void* data, std::size_t bytes) {
   if (bytes == 0) return;
   const Buffer* source = &buffer;
   if (!buffer.mapped()) {
-    auto& staging = staging_.emplace_back(std::make_unique<Buffer>(context_));
-    staging->reserve_staging(bytes);
-    copy(buffer, *staging, bytes);
-    source = staging.get();
+    Buffer& staging = next_staging(bytes);
+    copy(buffer, staging, bytes);
+    source = &staging;
   }
   after_run_.push_back([source, data, bytes] { std::memcpy(data, source->mapped(), bytes); });
+}
+
+Buffer& CommandBatch::next_staging(std::size_t bytes) {
+  if (staging_used_ == staging_.size()) staging_.push_back(std::make_unique<Buffer>(context_));
+  Buffer& staging = *staging_[staging_used_++];
+  staging.reserve_staging(bytes);
+  return staging;
 }
 
 void CommandBatch::run() {
@@ -255,7 +260,7 @@ void CommandBatch::run() {
   }
   for (auto& copy_out : after_run_) copy_out();
   after_run_.clear();
-  staging_.clear();
+  staging_used_ = 0;
   for (VkDescriptorPool pool : pools_) vkResetDescriptorPool(context_.device(), pool, 0);
   pool_in_use_ = 0;
 }

@@ -77,7 +77,11 @@ class CommandBatch {
   std::size_t pool_in_use_ = 0;
   bool recording_ = false;
   std::vector<std::function<void()>> after_run_;
-  std::vector<std::unique_ptr<Buffer>> staging_;  // per batch; released by run()
+  // Staging buffers, reused by the next batch: the n-th transfer of a batch takes the n-th,
+  // so a frame-to-frame loop allocates nothing once they have grown.
+  Buffer& next_staging(std::size_t bytes);
+  std::vector<std::unique_ptr<Buffer>> staging_;
+  std::size_t staging_used_ = 0;
   // Timestamps: one at the start of the batch, then one after each dispatch.
   VkQueryPool queries_ = VK_NULL_HANDLE;
   std::vector<const char*> timed_;  // kernel name of each timestamp after the first

@@ -165,7 +165,7 @@ VulkanDeviceInfo describe_device(VkPhysicalDevice physical, int index) {
   return info;
 }
 
-Context::Context(const VulkanOptions& options) {
+Context::Context(const VulkanOptions& options) : map_device_memory_(options.map_device_memory) {
   const int device_index = options.device;
   instance_ = create_instance();
   try {

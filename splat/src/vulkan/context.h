@@ -30,6 +30,7 @@ class Context {
   VkCommandPool command_pool() const { return command_pool_; }
   const VulkanDeviceInfo& info() const { return info_; }
   bool float_atomics_enabled() const { return float_atomics_; }
+  bool map_device_memory() const { return map_device_memory_; }
   // Nanoseconds per timestamp tick on the compute queue; 0 if it has no timestamps.
   double timestamp_period_ns() const { return timestamp_period_ns_; }
   // Index of a memory type allowed by type_bits that has all of `required`, preferring
@@ -56,6 +57,7 @@ class Context {
   VulkanDeviceInfo info_;
   std::atomic<std::size_t> allocated_{0};
   bool float_atomics_ = false;
+  bool map_device_memory_ = true;
   double timestamp_period_ns_ = 0;
 };
 
