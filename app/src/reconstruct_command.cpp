@@ -52,18 +52,19 @@ int run_reconstruct(const ReconstructOptions& o) {
   }
   progress.finish();
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
-  if (config.refine_passes > 0 && slam.keyframes_added() > 0) {
-    const std::size_t visits = slam.keyframes_added() * static_cast<std::size_t>(config.refine_passes);
-    Progress refine_progress("refine", visits, "keyframe visits");
+  const std::size_t refine_frames = slam.refine_frames(outputs.records()).size();
+  if (config.refine_passes > 0 && refine_frames > 0) {
+    const std::size_t visits = refine_frames * static_cast<std::size_t>(config.refine_passes);
+    Progress refine_progress("refine", visits, "frame visits");
     const std::size_t pruned = slam.refine_map(
         outputs.records(), [&](std::size_t i) { return dataset.load(i); },
         [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map().size()) + " Gaussians"); });
     refine_progress.finish();
-    outputs.extra()["refinement"] = {{"keyframes", slam.keyframes_added()}, {"passes", config.refine_passes},
+    outputs.extra()["refinement"] = {{"frames", refine_frames}, {"passes", config.refine_passes},
                                      {"iterations_per_visit", config.refine_iterations}, {"pruned", pruned},
                                      {"seconds", refine_progress.elapsed_seconds()}};
-    std::fprintf(stderr, "refined the map: %zu keyframes x %d passes in %.1f s, %zu Gaussians pruned\n",
-                 slam.keyframes_added(), config.refine_passes, refine_progress.elapsed_seconds(), pruned);
+    std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned\n",
+                 refine_frames, config.refine_passes, refine_progress.elapsed_seconds(), pruned);
   }
   std::vector<StampedPose> truth;
   for (const auto& e : dataset.entries) {

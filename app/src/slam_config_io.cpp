@@ -23,6 +23,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
     get(j, "keyframe_rotation_deg", c.keyframe_rotation_deg);
     get(j, "refine_passes", c.refine_passes);
     get(j, "refine_iterations", c.refine_iterations);
+    get(j, "refine_all_frames", c.refine_all_frames);
     if (j.contains("tracking")) {
       const auto& t = j.at("tracking");
       get(t, "pyramid", c.tracking.pyramid);

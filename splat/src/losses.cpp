@@ -53,39 +53,43 @@ double pointwise_loss(const char* name, std::span<const T> pred, std::span<const
 double sign(double r) { return r > 0 ? 1.0 : (r < 0 ? -1.0 : 0.0); }
 
 // Separable 11-tap Gaussian (sigma 1.5) blur with zero padding; symmetric, so it is also its
-// own adjoint.
+// own adjoint. In the loss's own precision: float halves the work of the float loss (16 lanes
+// instead of 8), and the statistics it blurs are within [0, 1].
 constexpr int kRadius = 5;
+template <typename A>
 struct Window {
-  double w[2 * kRadius + 1];
+  A w[2 * kRadius + 1];
   Window() {
-    double sum = 0;
-    for (int i = -kRadius; i <= kRadius; ++i) sum += w[i + kRadius] = std::exp(-i * i / (2 * 1.5 * 1.5));
-    for (double& v : w) v /= sum;
+    double taps[2 * kRadius + 1], sum = 0;
+    for (int i = -kRadius; i <= kRadius; ++i) sum += taps[i + kRadius] = std::exp(-i * i / (2 * 1.5 * 1.5));
+    for (int i = 0; i <= 2 * kRadius; ++i) w[i] = static_cast<A>(taps[i] / sum);
   }
 };
 
-void blur(const std::vector<double>& in, std::vector<double>& out, int width, int height) {
-  static const Window window;
-  std::vector<double> tmp(in.size(), 0.0);
-  out.assign(in.size(), 0.0);
+// `tmp` is scratch of the image's size; `out` is overwritten.
+template <typename A>
+void blur(const std::vector<A>& in, std::vector<A>& out, std::vector<A>& tmp, int width, int height) {
+  static const Window<A> window;
+  tmp.assign(in.size(), A(0));
+  out.assign(in.size(), A(0));
   // Horizontal: tap by tap over the pixels it reaches (taps outside the row are zero padding),
   // so the pixel loop vectorizes; each pixel still sums its taps in order.
   for (int y = 0; y < height; ++y) {
-    const double* row = &in[std::size_t(y) * width];
-    double* dst = &tmp[std::size_t(y) * width];
+    const A* row = &in[std::size_t(y) * width];
+    A* dst = &tmp[std::size_t(y) * width];
     for (int k = -kRadius; k <= kRadius; ++k) {
-      const double w = window.w[k + kRadius];
+      const A w = window.w[k + kRadius];
       for (int x = std::max(0, -k); x < std::min(width, width - k); ++x) dst[x] += w * row[x + k];
     }
   }
   // Vertical: the same, whole rows at a time.
   for (int y = 0; y < height; ++y) {
-    double* dst = &out[std::size_t(y) * width];
+    A* dst = &out[std::size_t(y) * width];
     for (int k = -kRadius; k <= kRadius; ++k) {
       const int yy = y + k;
       if (yy < 0 || yy >= height) continue;
-      const double w = window.w[k + kRadius];
-      const double* src = &tmp[std::size_t(yy) * width];
+      const A w = window.w[k + kRadius];
+      const A* src = &tmp[std::size_t(yy) * width];
       for (int x = 0; x < width; ++x) dst[x] += w * src[x];
     }
   }
@@ -148,11 +152,11 @@ double dssim_loss(std::span<const T> pred, std::span<const T> target, int width,
   if (width < 1 || height < 1 || channels < 1) throw Error("dssim_loss: empty image");
   check_sizes<T>("dssim_loss", pred.size(), target.size(), grad.size(), 0, pixels);
   if (pred.size() != pixels * channels) throw Error("dssim_loss: image size does not match " + std::to_string(width) + "x" + std::to_string(height));
-  constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;
-  const double scale = weight / static_cast<double>(pixels * channels);
+  constexpr T kC1 = T(0.01 * 0.01), kC2 = T(0.03 * 0.03);
+  const T scale = static_cast<T>(weight / static_cast<double>(pixels * channels));
   double ssim_sum = 0;
-  std::vector<double> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels);
-  std::vector<double> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
+  std::vector<T> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels), tmp;
+  std::vector<T> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
   for (int c = 0; c < channels; ++c) {
     for (std::size_t p = 0; p < pixels; ++p) {
       x[p] = pred[p * channels + c];
@@ -161,16 +165,16 @@ double dssim_loss(std::span<const T> pred, std::span<const T> target, int width,
       yy[p] = y[p] * y[p];
       xy[p] = x[p] * y[p];
     }
-    blur(x, mx, width, height);
-    blur(y, my, width, height);
-    blur(xx, exx, width, height);
-    blur(yy, eyy, width, height);
-    blur(xy, exy, width, height);
+    blur(x, mx, tmp, width, height);
+    blur(y, my, tmp, width, height);
+    blur(xx, exx, tmp, width, height);
+    blur(yy, eyy, tmp, width, height);
+    blur(xy, exy, tmp, width, height);
     for (std::size_t p = 0; p < pixels; ++p) {
-      const double a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
-      const double b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
-      const double b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
-      const double s = a1 * a2 / (b1 * b2);
+      const T a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
+      const T b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
+      const T b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
+      const T s = a1 * a2 / (b1 * b2);
       ssim_sum += s;
       // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale.
       da[p] = -scale * s * (2 * my[p] / a1 - 2 * my[p] / a2 - 2 * mx[p] / b1 + 2 * mx[p] / b2);
@@ -178,12 +182,10 @@ double dssim_loss(std::span<const T> pred, std::span<const T> target, int width,
       dc[p] = -scale * s * (2 / a2);
     }
     // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
-    blur(da, ga, width, height);
-    blur(db, gb, width, height);
-    blur(dc, gc, width, height);
-    for (std::size_t p = 0; p < pixels; ++p) {
-      grad[p * channels + c] += static_cast<T>(ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p]);
-    }
+    blur(da, ga, tmp, width, height);
+    blur(db, gb, tmp, width, height);
+    blur(dc, gc, tmp, width, height);
+    for (std::size_t p = 0; p < pixels; ++p) grad[p * channels + c] += ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p];
   }
   return weight * (1 - ssim_sum / static_cast<double>(pixels * channels));
 }

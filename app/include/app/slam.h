@@ -24,6 +24,9 @@ struct SlamConfig {
   // many times in shuffled order with `refine_iterations` map steps per visit.
   int refine_passes = 0;  // set by the constructor, like the other defaults tuned on teddy
   int refine_iterations = 0;
+  // Sweep every tracked frame instead of the keyframes alone: more viewpoints for the same
+  // number of steps.
+  bool refine_all_frames = false;
   SlamConfig();
 };
 
@@ -73,10 +76,13 @@ class SlamSystem {
   FrameRecord process(const splat::RgbdFrame& frame);
   const splat::Gaussians& map() const { return mapper_.map(); }
   std::size_t keyframes_added() const { return keyframes_; }
-  // The final sweep (SlamConfig::refine_passes) over the keyframes among `records` (as
+  // The final sweep (SlamConfig::refine_passes) over the keyframes, or all tracked frames
+  // (refine_all_frames), among `records` (as
   // process() returned them, one per frame), each reloaded with load(frame index) when visited
   // so memory stays bounded; a shuffled order, the same on every run. Then prunes. Calls
   // visited(done, total) after each visit. Returns the number of Gaussians pruned.
+  // The frames refine_map visits, by index into `records`.
+  std::vector<std::size_t> refine_frames(const std::vector<FrameRecord>& records) const;
   std::size_t refine_map(const std::vector<FrameRecord>& records,
                          const std::function<splat::RgbdFrame(std::size_t)>& load,
                          const std::function<void(std::size_t, std::size_t)>& visited = {});
