@@ -37,6 +37,7 @@ int run_eval(const EvalOptions& o) {
   const auto pairs = associate(te, ts, 1e-4);  // the run's lines carry the frames' own timestamps
   double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0;
   std::size_t rendered = 0;
+  std::vector<double> frame_times, frame_psnr, frame_ssim;  // per rendered frame, for the plot
   Progress progress("eval renders", pairs.size(), "frames");
   for (std::size_t k = 0; k < pairs.size(); k += static_cast<std::size_t>(std::max(1, o.every))) {
     const splat::RgbdFrame frame = dataset.load(pairs[k].first);
@@ -44,9 +45,12 @@ int run_eval(const EvalOptions& o) {
     const splat::ForwardResult f = rasterizer->forward(map.gaussians, cam, {});
     std::vector<float> valid(frame.depth.size()), grad(f.rgb.size());
     for (std::size_t p = 0; p < valid.size(); ++p) valid[p] = frame.depth[p] > 0 ? 1.f : 0.f;
-    psnr += splat::psnr(f.rgb, frame.rgb, 3);
+    frame_times.push_back(frame.timestamp);
+    frame_psnr.push_back(splat::psnr(f.rgb, frame.rgb, 3));
+    frame_ssim.push_back(1 - splat::dssim_loss<float>(f.rgb, frame.rgb, frame.width(), frame.height(), 3, grad));
+    psnr += frame_psnr.back();
     psnr_masked += splat::psnr(f.rgb, frame.rgb, 3, valid);
-    ssim += 1 - splat::dssim_loss<float>(f.rgb, frame.rgb, frame.width(), frame.height(), 3, grad);
+    ssim += frame_ssim.back();
     std::vector<float> dgrad(f.depth.size());
     depth_l1 += splat::depth_l1_loss<float>(f.depth_normalized, frame.depth, {}, dgrad);
     ++rendered;
@@ -62,7 +66,8 @@ int run_eval(const EvalOptions& o) {
       {"ate", {{"rmse_m", errors.ate_rmse}, {"mean_m", errors.ate_mean}, {"max_m", errors.ate_max}, {"matched_frames", errors.matched}, {"scale", errors.scale}}},
       {"rpe_1s", {{"translation_rmse_m", errors.rpe_translation_rmse}, {"rotation_rmse_deg", errors.rpe_rotation_rmse_deg}, {"pairs", errors.rpe_pairs}}},
       {"rendering", {{"frames", rendered}, {"psnr_db", psnr / n}, {"ssim", ssim / n}, {"depth_l1_m", depth_l1 / n},
-                     {"psnr_masked_valid_depth_db", psnr_masked / n}}},
+                     {"psnr_masked_valid_depth_db", psnr_masked / n},
+                     {"per_frame", {{"timestamp", frame_times}, {"psnr_db", frame_psnr}, {"ssim", frame_ssim}}}}},
       {"gaussians", map.gaussians.size()},
   };
   write_json(o.run / "eval.json", j);
@@ -96,6 +101,17 @@ int run_eval(const EvalOptions& o) {
   curve.title(rmse);
   curve.add(t, e, {30, 60, 200});
   write_png_rgb8(o.run / "ate_over_time.png", curve.render());
+  if (!frame_times.empty()) {
+    LinePlot quality(800, 300);
+    std::vector<double> since_start;
+    for (double ts_frame : frame_times) since_start.push_back(ts_frame - frame_times.front());
+    quality.labels("time (s)", "PSNR (dB)");
+    char mean[64];
+    std::snprintf(mean, sizeof mean, "PSNR of the final map at each input frame, mean %.2f dB", psnr / n);
+    quality.title(mean);
+    quality.add(since_start, frame_psnr, {30, 140, 60});
+    write_png_rgb8(o.run / "psnr_over_time.png", quality.render());
+  }
 
   std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth), SSIM %.3f, depth L1 %.2f cm -> %s\n",
               errors.ate_rmse * 100, errors.matched, errors.rpe_translation_rmse * 100, errors.rpe_rotation_rmse_deg,

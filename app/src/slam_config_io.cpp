@@ -46,6 +46,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "pose_rotation_learning_rate", c.mapping.pose_rotation_learning_rate);
       get(m, "depth_alpha_threshold", c.mapping.depth_alpha_threshold);
       get(m, "refine_depth_alpha_threshold", c.mapping.refine_depth_alpha_threshold);
+      get(m, "refine_learning_rate_scale", c.mapping.refine_learning_rate_scale);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());

@@ -57,7 +57,7 @@ void GaussianAdam::ensure_layout(const splat::Gaussians& map) {
   }
 }
 
-void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads) {
+void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale) {
   ensure_layout(map);
   splat::validate_sizes(splat::GaussiansView(grads), "GaussianAdam::step gradients");
   if (grads.size() != map.size() || grads.sh_degree != map.sh_degree) {
@@ -88,7 +88,7 @@ void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads
           case splat::ParamGroup::kSh: lr = c < 3 ? config_.sh_dc : config_.sh_rest; break;
         }
         const std::size_t j = i * width + c;
-        splat::adam_update(p[j], g[j], m[j], v[j], lr, bias1[i], bias2[i], config_.hyper);
+        splat::adam_update(p[j], g[j], m[j], v[j], lr * lr_scale, bias1[i], bias2[i], config_.hyper);
       }
     }
   }

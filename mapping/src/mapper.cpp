@@ -15,6 +15,7 @@ void MapperConfig::validate() const {
   if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
   if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
   if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
+  if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -114,7 +115,7 @@ double Mapper::optimize_step(Keyframe& kf, Step step) {
     }
     std::fill(grads.rotations.begin(), grads.rotations.end(), 0.f);
   }
-  adam_.step(map_, grads);
+  adam_.step(map_, grads, step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale);
   return loss;
 }
 

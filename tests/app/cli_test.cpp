@@ -2,6 +2,8 @@
 // on bad input.
 #include <array>
 #include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -109,9 +111,18 @@ TEST(CliReconstruct, SyntheticDefaultWritesEveryOutputAndEvalReadsThem) {
   const RunResult e = run_gslam("eval " + (dir / "run").string() + " --dataset " + (dir / "run" / "synthetic_input").string());
   ASSERT_EQ(e.exit_code, 0) << e.output;
   EXPECT_NE(e.output.find("ATE RMSE"), std::string::npos) << e.output;
-  for (const char* name : {"eval.json", "trajectory_top.png", "ate_over_time.png"}) {
+  for (const char* name : {"eval.json", "trajectory_top.png", "ate_over_time.png", "psnr_over_time.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / name)) << name;
   }
+  // One PSNR and SSIM per rendered frame; their mean is the headline figure.
+  std::ifstream eval_file(dir / "run" / "eval.json");
+  const auto rendering = nlohmann::json::parse(eval_file).at("rendering");
+  const auto per_frame_psnr = rendering.at("per_frame").at("psnr_db").get<std::vector<double>>();
+  ASSERT_EQ(per_frame_psnr.size(), rendering.at("frames").get<std::size_t>());
+  ASSERT_EQ(rendering.at("per_frame").at("ssim").size(), per_frame_psnr.size());
+  double mean = 0;
+  for (double v : per_frame_psnr) mean += v / double(per_frame_psnr.size());
+  EXPECT_NEAR(mean, rendering.at("psnr_db").get<double>(), 1e-9);
   const RunResult missing = run_gslam("reconstruct " + (dir / "nowhere").string() + " --out " + (dir / "x").string());
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.output.find("dataset folder does not exist"), std::string::npos) << missing.output;

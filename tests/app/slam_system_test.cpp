@@ -137,8 +137,22 @@ double mean_psnr(splat::Rasterizer& rasterizer, const app::SlamSystem& slam, con
   return sum / static_cast<double>(records.size());
 }
 
-// The final sweep over every keyframe (reloaded from the dataset) undoes what later windows did
-// to regions earlier keyframes saw: the whole sequence renders better afterwards.
+// Which frames the final sweep visits: the keyframes, or every frame tracked (failed ones have
+// no trustworthy pose).
+TEST(SlamSystem, RefinementVisitsKeyframesOrEveryTrackedFrame) {
+  auto rasterizer = splat::make_cpu_rasterizer({1});
+  std::vector<app::FrameRecord> records(5);
+  records[0].keyframe = records[3].keyframe = true;
+  records[2].tracked = false;
+  app::SlamConfig config;
+  config.refine_all_frames = false;
+  EXPECT_EQ(app::SlamSystem(*rasterizer, config).refine_frames(records), (std::vector<std::size_t>{0, 3}));
+  config.refine_all_frames = true;
+  EXPECT_EQ(app::SlamSystem(*rasterizer, config).refine_frames(records), (std::vector<std::size_t>{0, 1, 3, 4}));
+}
+
+// The final sweep over every tracked frame (reloaded from the dataset) undoes what later windows
+// did to regions earlier keyframes saw: the whole sequence renders better afterwards.
 TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   gslam::test::TempDir dir;
   const app::Dataset dataset = synthetic_dataset(dir, 20);
@@ -154,11 +168,12 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
                     visits = done;
                     total = all;
                   });
-  EXPECT_EQ(total, slam.keyframes_added() * static_cast<std::size_t>(config.refine_passes));
+  ASSERT_TRUE(config.refine_all_frames);
+  EXPECT_EQ(slam.refine_frames(records).size(), records.size()) << "every frame was tracked";
+  EXPECT_EQ(total, records.size() * static_cast<std::size_t>(config.refine_passes));
   EXPECT_EQ(visits, total);
   const double after = mean_psnr(*rasterizer, slam, dataset, records);
-  std::printf("synthetic, %zu keyframes: mean PSNR %.2f -> %.2f dB after refinement\n", slam.keyframes_added(), before,
-              after);
+  std::printf("synthetic, %zu frames: mean PSNR %.2f -> %.2f dB after refinement\n", records.size(), before, after);
   EXPECT_GT(after, before + 0.5);
 }
 

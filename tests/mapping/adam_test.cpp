@@ -36,6 +36,15 @@ TEST(GaussianAdam, FirstStepMovesEachParameterByItsLearningRate) {
   EXPECT_NEAR(before.sh[5] - map.sh[5], adam.config().sh_rest, 1e-7);
 }
 
+TEST(GaussianAdam, LearningRateScaleScalesTheStep) {
+  splat::Gaussians map = map_of(3);
+  const splat::Gaussians before = map;
+  mapping::GaussianAdam adam;
+  adam.step(map, grads_for(map), 0.25);
+  EXPECT_NEAR(before.means[4] - map.means[4], 0.25 * adam.config().means, 1e-7);
+  EXPECT_NEAR(before.log_scales[1] - map.log_scales[1], 0.25 * adam.config().log_scales, 1e-6);
+}
+
 TEST(GaussianAdam, StateStaysAlignedWhenGaussiansAreRemovedAndAppended) {
   splat::Gaussians map = map_of(5);
   mapping::GaussianAdam adam;

@@ -27,9 +27,10 @@ class GaussianAdam {
  public:
   explicit GaussianAdam(const AdamConfig& config = {}) : config_(config) {}
 
-  // Applies one step to every Gaussian. Throws splat::Error if the gradient layout differs
-  // from the map or the map size differs from the optimizer state.
-  void step(splat::Gaussians& map, const splat::GaussianGrads& grads);
+  // Applies one step to every Gaussian, with every learning rate times `lr_scale`. Throws
+  // splat::Error if the gradient layout differs from the map or the map size differs from the
+  // optimizer state.
+  void step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale = 1);
   // `n` new Gaussians at the end of the map, with zero moments.
   void append(std::size_t n, int sh_degree);
   // Keeps the Gaussians where keep[i] != 0, in order (the caller compacts the map the same way).

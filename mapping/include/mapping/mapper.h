@@ -26,6 +26,8 @@ struct MapperConfig {
   // The same for the final refinement, where poses no longer move and D's push towards opaque
   // surfaces renders better: teddy, 193 frames, PSNR 21.33 dB at 0.95, 22.12 dB at 1 (D everywhere).
   double refine_depth_alpha_threshold = 1.0;
+  // Adam's learning rates in the final refinement, relative to the window steps'.
+  double refine_learning_rate_scale = 1.0;
   // Keep Gaussians isotropic (one scale, no rotation), as SplaTAM does. Off by default: on the
   // first 60 teddy frames anisotropic maps rendered better (24.6 vs 23.9 dB masked PSNR).
   bool isotropic = false;
