@@ -4,6 +4,8 @@
 #include <memory>
 #include <mutex>
 
+#include <gtest/gtest.h>
+
 #include "splat/error.h"
 #include "splat/vulkan_rasterizer.h"
 
@@ -23,16 +25,32 @@ bool gpu_tests_required() {
 #endif
 }
 
+namespace {
+
+struct Entry {
+  std::unique_ptr<splat::Rasterizer> rasterizer;
+  std::string why_not;
+};
+std::mutex cache_mutex;
+std::map<std::string, Entry> cache;
+
+// Destroys the backends after the last test, while GPU drivers are still loaded: by the time
+// static objects are destroyed, a driver loaded after this cache was built (NVIDIA's) may have
+// torn itself down, and destroying a device then crashes.
+class ReleaseBackends : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::lock_guard lock(cache_mutex);
+    cache.clear();
+  }
+};
+[[maybe_unused]] ::testing::Environment* const release_backends =
+    ::testing::AddGlobalTestEnvironment(new ReleaseBackends);
+
+}  // namespace
+
 splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not) {
-  struct Entry {
-    std::unique_ptr<splat::Rasterizer> rasterizer;
-    std::string why_not;
-  };
-  static std::mutex mutex;
-  // Never destroyed: at exit, a GPU driver loaded after this map was built may already have
-  // run its own teardown, and destroying a device then crashes (seen with NVIDIA's driver).
-  static auto& cache = *new std::map<std::string, Entry>;
-  std::lock_guard lock(mutex);
+  std::lock_guard lock(cache_mutex);
   auto it = cache.find(name);
   if (it == cache.end()) {
     Entry entry;
