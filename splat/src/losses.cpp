@@ -29,6 +29,18 @@ double pointwise_loss(const char* name, std::span<const T> pred, std::span<const
   if (channels < 1) throw Error(std::string(name) + ": channels is " + std::to_string(channels));
   const std::size_t pixels = pred.size() / static_cast<std::size_t>(channels);
   check_sizes<T>(name, pred.size(), target.size(), grad.size(), mask.size(), pixels);
+  if (mask.empty() && !needs_measurement) {  // every element counts: one vectorized pass
+    if (pred.empty()) return 0;
+    const double scale = weight / static_cast<double>(pred.size());
+    double sum = 0;
+#pragma omp simd reduction(+ : sum)
+    for (std::size_t i = 0; i < pred.size(); ++i) {
+      const double r = double(pred[i]) - double(target[i]);
+      sum += value(r);
+      grad[i] += static_cast<T>(scale * derivative(r));
+    }
+    return sum * scale;
+  }
   auto counted = [&](std::size_t p, std::size_t i) {
     return (mask.empty() || mask[p] > 0) && (!needs_measurement || target[i] > 0);
   };

@@ -1,11 +1,12 @@
-// The mapping step's host-side losses at the image sizes mapping uses (half and full 640x480),
-// value and gradient together, as Mapper calls them.
-// Run: build/bench/losses_bench [--benchmark_filter=...]
+// The host-side work of one mapping step, as Mapper does it: the losses (value and gradient) at
+// the image sizes mapping uses (half and full 640x480), and the Adam step over a map.
+// Run: build/bench/mapping_host_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
 #include <random>
 #include <vector>
 
+#include "mapping/gaussian_adam.h"
 #include "splat/losses.h"
 #include "splat/rasterizer.h"
 
@@ -42,6 +43,26 @@ void l1(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(splat::l1_loss<float>(im.pred, im.target, 3, {}, im.grad));
 }
 
+// One step over a map of state.range(0) Gaussians at SH degree 0 (teddy's maps: 55K).
+void adam_step(benchmark::State& state) {
+  const std::size_t n = std::size_t(state.range(0));
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  splat::Gaussians map;
+  map.sh_degree = 0;
+  map.means.resize(n * 3);
+  map.log_scales.resize(n * 3);
+  map.rotations.resize(n * 4);
+  map.opacity_logits.resize(n);
+  map.sh.resize(n * 3);
+  splat::GaussianGrads grads = map;
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    for (float& v : splat::param_group(grads, group)) v = 1e-3f * u(rng);
+  }
+  mapping::GaussianAdam adam;
+  for (auto _ : state) adam.step(map, grads);
+}
+
 void sizes(benchmark::internal::Benchmark* b) {
   b->Args({320, 240})->Args({640, 480})->Unit(benchmark::kMillisecond);
 }
@@ -50,6 +71,7 @@ void sizes(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(dssim)->Apply(sizes);
 BENCHMARK(l1)->Apply(sizes);
+BENCHMARK(adam_step)->Arg(55000)->Arg(200000)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   // As in gslam, a rasterizer exists: making one keeps freed frame-sized buffers in the heap
