@@ -66,16 +66,16 @@ void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads
   }
   const std::size_t n = map.size();
   // Bias corrections per Gaussian. Step counts repeat across the map (Gaussians added
-  // together share them), so each distinct count's powers are computed once.
-  std::vector<double> bias1(n), bias2(n), pow1, pow2;
+  // together share them), so the powers of each count are computed once and kept.
+  std::vector<double> bias1(n), bias2(n);
   for (std::size_t i = 0; i < n; ++i) {
     const uint32_t t = ++steps_[i];
-    while (pow1.size() <= t) {
-      pow1.push_back(std::pow(config_.hyper.beta1, double(pow1.size())));
-      pow2.push_back(std::pow(config_.hyper.beta2, double(pow2.size())));
+    while (beta1_powers_.size() <= t) {
+      beta1_powers_.push_back(std::pow(config_.hyper.beta1, double(beta1_powers_.size())));
+      beta2_powers_.push_back(std::pow(config_.hyper.beta2, double(beta2_powers_.size())));
     }
-    bias1[i] = 1 - pow1[t];
-    bias2[i] = 1 - pow2[t];
+    bias1[i] = 1 - beta1_powers_[t];
+    bias2[i] = 1 - beta2_powers_[t];
   }
   for (splat::ParamGroup group : splat::kAllParamGroups) {
     std::vector<float>& p = splat::param_group(map, group);
@@ -83,19 +83,17 @@ void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads
     std::vector<float>& m = splat::param_group(m_, group);
     std::vector<float>& v = splat::param_group(v_, group);
     const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, map.sh_degree));
-    std::vector<double> lr(width);  // per column: SH degree 0 and the rest differ
-    for (std::size_t c = 0; c < width; ++c) {
-      switch (group) {
-        case splat::ParamGroup::kMeans: lr[c] = config_.means; break;
-        case splat::ParamGroup::kLogScales: lr[c] = config_.log_scales; break;
-        case splat::ParamGroup::kRotations: lr[c] = config_.rotations; break;
-        case splat::ParamGroup::kOpacityLogits: lr[c] = config_.opacity_logits; break;
-        case splat::ParamGroup::kSh: lr[c] = c < 3 ? config_.sh_dc : config_.sh_rest; break;
-      }
-      lr[c] *= lr_scale;
-    }
     // Column by column, so the Gaussians' loop vectorizes (strided by the group's width).
     for (std::size_t c = 0; c < width; ++c) {
+      double lr = 0;
+      switch (group) {
+        case splat::ParamGroup::kMeans: lr = config_.means; break;
+        case splat::ParamGroup::kLogScales: lr = config_.log_scales; break;
+        case splat::ParamGroup::kRotations: lr = config_.rotations; break;
+        case splat::ParamGroup::kOpacityLogits: lr = config_.opacity_logits; break;
+        case splat::ParamGroup::kSh: lr = c < 3 ? config_.sh_dc : config_.sh_rest; break;
+      }
+      lr *= lr_scale;
       float* pc = p.data() + c;
       const float* gc = g.data() + c;
       float* mc = m.data() + c;
@@ -103,7 +101,7 @@ void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads
 #pragma omp simd
       for (std::size_t i = 0; i < n; ++i) {
         const std::size_t j = i * width;
-        splat::adam_update(pc[j], gc[j], mc[j], vc[j], lr[c], bias1[i], bias2[i], config_.hyper);
+        splat::adam_update(pc[j], gc[j], mc[j], vc[j], lr, bias1[i], bias2[i], config_.hyper);
       }
     }
   }

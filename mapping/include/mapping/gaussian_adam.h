@@ -47,6 +47,7 @@ class GaussianAdam {
   AdamConfig config_;
   splat::Gaussians m_, v_;
   std::vector<uint32_t> steps_;
+  std::vector<double> beta1_powers_, beta2_powers_;  // beta^t for t = 0, 1, ...
 };
 
 // Compacts a map in place: keeps the Gaussians where keep[i] != 0, in order.
