@@ -1,0 +1,41 @@
+#!/bin/bash
+# Runs the Vulkan checks on a GPU machine, from the repository root, on the bundle that
+# scripts/gpu_bundle.sh made: STEP = tests (the Vulkan tests), bench (rasterizer_bench),
+# teddy (reconstruct + eval on the teddy prefix), render (donut orbit, Vulkan and CPU), live
+# (replayed at 1x and 0.25x), or all (the first four). Results go to $OUT (default /tmp/gpu_out).
+# The binaries carry their build's absolute paths (/work/main, ../shared/data): links stand in.
+# Expects the Vulkan loader and glvnd unpacked from .gl/*.deb when present (a bare NVIDIA image).
+R=$PWD; B=$R/.device-data; OUT=${OUT:-/tmp/gpu_out}; mkdir -p "$OUT"
+if ls .gl/*.deb > /dev/null 2>&1; then for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig; fi
+export LD_LIBRARY_PATH=$B/lib:/usr/local/nvidia/lib64:/usr/local/nvidia/lib
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[ -f $icd ] && export VK_DRIVER_FILES=$icd
+mkdir -p /work/shared; [ -e /work/main ] || ln -s "$R" /work/main; [ -e /work/shared/data ] || ln -s "$B/data" /work/shared/data
+mkdir -p build/app && cp "$B/bin/gslam" build/app/gslam
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv | tee "$OUT/gpu.txt"
+STEP=${1:-all}
+T=$B/data/tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy
+if [ "$STEP" = all ] || [ "$STEP" = tests ]; then
+  for t in splat_tests app_tests system_tests; do
+    timeout 240 "$B/bin/$t" --gtest_brief=1 --gtest_filter='*Vulkan*:*vulkan*' > "$OUT/$t.log" 2>&1; echo "$t rc=$?"; tail -3 "$OUT/$t.log"
+  done
+fi
+if [ "$STEP" = all ] || [ "$STEP" = bench ]; then
+  timeout 200 "$B/bin/rasterizer_bench" --benchmark_filter=vulkan 2>&1 | tee "$OUT/bench.txt"
+fi
+if [ "$STEP" = all ] || [ "$STEP" = teddy ]; then
+  timeout 240 build/app/gslam reconstruct "$T" --backend vulkan --out /tmp/teddy_vk > "$OUT/teddy_vk.log" 2>&1; echo "reconstruct rc=$?"; tail -3 "$OUT/teddy_vk.log"
+  timeout 120 build/app/gslam eval /tmp/teddy_vk --dataset "$T" --backend vulkan 2>&1 | tail -1
+  cp /tmp/teddy_vk/summary.json "$OUT/teddy_vk_summary.json"
+fi
+if [ "$STEP" = all ] || [ "$STEP" = render ]; then
+  for be in vulkan cpu; do
+    timeout 120 build/app/gslam render "$B/data/v3dg_donut_3dgs_ply/fused.ply" --orbit 60 --size 1280x720 --format png --backend $be --out /tmp/render_$be 2>&1 | tail -1
+  done
+fi
+if [ "$STEP" = live ]; then
+  for sp in 1 0.25; do
+    timeout 150 build/app/gslam live "$T" --out /tmp/live_$sp --headless --backend vulkan --speed $sp > "$OUT/live_$sp.log" 2>&1; echo "live speed $sp rc=$?"; tail -2 "$OUT/live_$sp.log"
+    timeout 60 build/app/gslam eval /tmp/live_$sp --dataset "$T" --backend vulkan 2>&1 | tail -1
+  done
+fi
