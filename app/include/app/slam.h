@@ -20,8 +20,9 @@ struct SlamConfig {
   int keyframe_every = 5;
   double keyframe_translation = 0.05;  // metres
   double keyframe_rotation_deg = 5.0;
-  // After the last frame (offline runs): sweep every keyframe, reloaded from the dataset, this
-  // many times in shuffled order with `refine_iterations` map steps per visit.
+  // After the last frame (offline runs): sweep the keyframes (or every tracked frame, with
+  // refine_all_frames), reloaded from the dataset, this many times in shuffled order with
+  // `refine_iterations` map steps per visit.
   int refine_passes = 0;  // set by the constructor, like the other defaults tuned on teddy
   int refine_iterations = 0;
   // Sweep every tracked frame instead of the keyframes alone: more viewpoints for the same
