@@ -59,11 +59,11 @@ void run(benchmark::State& state, const std::string& backend_name, bool backward
   const std::size_t intersections = f.stats.intersections;
   state.counters["coverage"] = covered / static_cast<double>(pixels);
   state.counters["isects"] = static_cast<double>(intersections);
-  // Device time per stage and iteration (Vulkan timestamps), the three largest.
+  // Time per stage and iteration (Vulkan timestamps, CPU wall time), the four largest.
   std::vector<std::pair<double, std::string>> stages;
   for (const auto& [name, ms] : rasterizer->stage_times_ms()) stages.push_back({ms, name});
   std::sort(stages.rbegin(), stages.rend());
-  for (std::size_t k = 0; k < std::min<std::size_t>(3, stages.size()); ++k) {
+  for (std::size_t k = 0; k < std::min<std::size_t>(4, stages.size()); ++k) {
     state.counters[stages[k].second + "_ms"] = stages[k].first / static_cast<double>(state.iterations());
   }
   state.SetLabel(rasterizer->name());

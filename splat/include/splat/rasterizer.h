@@ -122,8 +122,9 @@ class Rasterizer {
   virtual std::vector<float> pose_jacobian(const ForwardResult& forward) = 0;
   // Device memory the backend holds now, in bytes (0 for the CPU backend).
   virtual std::size_t device_memory_bytes() const { return 0; }
-  // Device time per stage (shader) since the last reset, in milliseconds, where the backend
-  // can measure it (Vulkan timestamps; empty for the CPU backend). For profiling.
+  // Time per stage since the last reset, in milliseconds, where the backend can measure it:
+  // device time per shader (Vulkan timestamps) or wall time per pipeline stage (CPU). For
+  // profiling.
   virtual std::map<std::string, double> stage_times_ms() const { return {}; }
   virtual void reset_stage_times() {}
 };

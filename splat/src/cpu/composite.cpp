@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iterator>
 
 #if defined(__AVX512F__)
@@ -135,33 +136,72 @@ struct PixelEval {
   T raw_alpha;  // opacity * gauss before the cap
 };
 
+// One tile row of 16 pixels as one vector value (GCC vector extension). The forward pass keeps
+// its rows' compositing state in registers while it walks the splats that reach them.
+template <typename T>
+struct RowOf;
+template <>
+struct RowOf<float> {
+  typedef float type __attribute__((vector_size(kTile * sizeof(float))));
+  typedef int32_t mask __attribute__((vector_size(kTile * sizeof(float))));
+};
+template <>
+struct RowOf<double> {
+  typedef double type __attribute__((vector_size(kTile * sizeof(double))));
+  typedef int64_t mask __attribute__((vector_size(kTile * sizeof(double))));
+};
+template <typename T>
+using Row = typename RowOf<T>::type;
+// Integer lanes as wide as T's: comparisons give all ones (true) or zero.
+template <typename T>
+using RowMaskOf = typename RowOf<T>::mask;
+using RowInt = RowMaskOf<float>;
+
+// floor and 2^n for float lanes, scalar or row.
+inline float floor_lanes(float x) { return std::floor(x); }
+inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the range below keeps it
+  const Row<float> cut = __builtin_convertvector(__builtin_convertvector(x, RowInt), Row<float>);
+  return cut > x ? cut - 1 : cut;
+}
+inline float pow2_lanes(float n) { return std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23); }
+inline Row<float> pow2_lanes(Row<float> n) {
+  return reinterpret_cast<Row<float>>((__builtin_convertvector(n, RowInt) + 127) << 23);
+}
+
 // exp(x) for x <= 0. Float: Cephes' range reduction and minimax polynomial (~2 ulp), written as
-// plain arithmetic so the pixel loop vectorizes (libm's expf does not without -ffast-math).
-// Double: std::exp, for gradient checks.
-inline float exp_nonpositive(float x) {
-  x = std::max(x, -87.f);  // below this the result is under 2^-126 and would flush anyway
-  const float n = std::floor(x * 1.44269504088896341f + 0.5f);
-  const float r = x - n * 0.693359375f + n * 2.12194440e-4f;  // x - n ln2, in two parts
-  float p = 1.9875691500e-4f;
-  p = p * r + 1.3981999507e-3f;
+// plain arithmetic so that it vectorizes (libm's expf does not without -ffast-math), for one
+// value or a row. Double: std::exp, for gradient checks.
+template <typename V>
+inline V exp_nonpositive_float(V x) {
+  x = x < -87.f ? -87.f : x;  // below this the result is under 2^-126 and would flush anyway
+  const V n = floor_lanes(x * 1.44269504088896341f + 0.5f);
+  const V r = x - n * 0.693359375f + n * 2.12194440e-4f;  // x - n ln2, in two parts
+  V p = r * 1.9875691500e-4f + 1.3981999507e-3f;
   p = p * r + 8.3334519073e-3f;
   p = p * r + 4.1665795894e-2f;
   p = p * r + 1.6666665459e-1f;
   p = p * r + 5.0000001201e-1f;
   p = p * r * r + r + 1.f;
-  return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
+  return p * pow2_lanes(n);
 }
+inline float exp_nonpositive(float x) { return exp_nonpositive_float(x); }
+inline Row<float> exp_nonpositive(Row<float> x) { return exp_nonpositive_float(x); }
 inline double exp_nonpositive(double x) { return std::exp(x); }
+inline Row<double> exp_nonpositive(Row<double> x) {
+  for (int k = 0; k < kTile; ++k) x[k] = std::exp(x[k]);
+  return x;
+}
 
-template <typename T>
-inline PixelEval<T> eval_pixel(const Splat<T>& s, T px, T py) {
-  PixelEval<T> e;
+// V is T for one pixel or a row vector of T for a tile row.
+template <typename T, typename V>
+inline PixelEval<V> eval_pixel(const Splat<T>& s, V px, V py) {
+  PixelEval<V> e;
   e.dx = s.mx - px;
   e.dy = s.my - py;
   e.sigma = T(0.5) * (s.ca * e.dx * e.dx + s.cc * e.dy * e.dy) + s.cb * e.dx * e.dy;
-  e.gauss = exp_nonpositive(-std::max(e.sigma, T(0)));
+  e.gauss = exp_nonpositive(-(e.sigma < 0 ? T(0) : e.sigma));
   e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
-  e.alpha = std::min(T(io::kAlphaMax), e.raw_alpha);
+  e.alpha = e.raw_alpha < T(io::kAlphaMax) ? e.raw_alpha : T(io::kAlphaMax);
   return e;
 }
 
@@ -199,8 +239,38 @@ TileGeometry tile_geometry(int tile, int tiles_x, int image_w, int image_h) {
 
 }  // namespace
 
+template <typename M>
+inline bool any_lane(M mask) {
+  for (int x = 0; x < kTile; ++x)
+    if (mask[x]) return true;
+  return false;
+}
+#if defined(__AVX512F__)
+// Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
+template <>
+inline bool any_lane(RowMaskOf<float> mask) {
+  static_assert(sizeof(mask) % sizeof(__m512i) == 0);
+  __m512i parts[sizeof(mask) / sizeof(__m512i)];
+  std::memcpy(parts, &mask, sizeof(mask));
+  __mmask16 any = 0;
+  for (const __m512i& part : parts) any |= _mm512_test_epi32_mask(part, part);
+  return any != 0;
+}
+#endif
+
+// The forward pass takes a tile's splats in chunks: it copies out those of a chunk that reach
+// the tile, with a bit per row saying which rows each one reaches; then each block of rows
+// walks its bits. Two rows per block give the out-of-order core two independent dependency
+// chains (transmittance runs from splat to splat), for the price of evaluating a splat on a
+// row it may miss: 2% faster than one row, 20% faster than four (100K donut, 2 cores).
+inline constexpr int kChunkSplats = 32;
+inline constexpr int kBlockRows = 2;
+inline constexpr int kBlocks = kTile / kBlockRows;
+
 template <typename T>
 void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
+  using V = Row<T>;
+  using RowMask = RowMaskOf<T>;
   const int w = f.camera.width, h = f.camera.height;
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   f.width = w;
@@ -214,79 +284,103 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
+  V lane{};
+  RowInt row_index{};
+  for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
-    alignas(64) T trans[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
-        acc_b[kTilePixels], acc_z[kTilePixels], done[kTilePixels];
-    alignas(64) int32_t last[kTilePixels];
-    int row_live[kTile];  // pixels of each row still compositing
-    for (int p = 0; p < kTilePixels; ++p) {
-      trans[p] = 1;
-      acc_r[p] = acc_g[p] = acc_b[p] = acc_z[p] = 0;
-      last[p] = 0;
+    V trans[kTile], acc_r[kTile], acc_g[kTile], acc_b[kTile], acc_z[kTile];
+    RowMask row_done[kTile];
+    RowMask last[kTile];  // integer lanes as wide as T's
+    int block_live[kBlocks] = {};  // pixels of each block still compositing
+    for (int y = 0; y < kTile; ++y) {
+      trans[y] = V{} + 1;
+      acc_r[y] = acc_g[y] = acc_b[y] = acc_z[y] = V{};
+      last[y] = RowMask{};
       // Pixels past the image edge start finished so they never hold the tile open.
-      done[p] = (p % kTile) >= geo.width || (p / kTile) >= geo.height;
+      row_done[y] = (lane >= T(geo.width)) | (RowMask{} - (y >= geo.height));
+      block_live[y / kBlockRows] += y < geo.height ? geo.width : 0;
     }
-    for (int y = 0; y < kTile; ++y) row_live[y] = y < geo.height ? geo.width : 0;
     int remaining = geo.width * geo.height;
+    const V px = lane + (T(geo.x0) + T(0.5));
+    alignas(64) Splat<T> chunk[kChunkSplats];
+    int32_t chunk_next_last[kChunkSplats];
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
-    for (uint32_t s = begin; s < end && remaining > 0; ++s) {
-      prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
-      const uint32_t id = f.sorted_ids[s];
-      const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
-      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
-      const int32_t next_last = static_cast<int32_t>(s + 1);
-      for (int y = rows.y0; y < rows.y1; ++y) {
-        if (row_live[y] == 0) continue;
-        const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
-        T* row_trans = trans + y * kTile;
-        T* row_done = done + y * kTile;
-        T* row_r = acc_r + y * kTile;
-        T* row_g = acc_g + y * kTile;
-        T* row_b = acc_b + y * kTile;
-        T* row_z = acc_z + y * kTile;
-        int32_t* row_last = last + y * kTile;
-        alignas(64) T stops[kTile];
-#pragma omp simd
-        for (int x = 0; x < kTile; ++x) {
-          const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          const T t = row_trans[x];
-          const T next_t = t * (1 - e.alpha);
-          // 1 where the splat blends into a still-compositing pixel; 0 otherwise.
-          const T live = e.alpha >= T(io::kAlphaMin) ? 1 - row_done[x] : T(0);
-          const T stop = next_t <= T(io::kTransmittanceMin) ? live : T(0);
-          const T add = live - stop;
-          const T weight = add * e.alpha * t;
-          row_r[x] += weight * sp.r;
-          row_g[x] += weight * sp.g;
-          row_b[x] += weight * sp.b;
-          row_z[x] += weight * sp.z;
-          row_trans[x] = add > 0 ? next_t : t;
-          row_last[x] = add > 0 ? next_last : row_last[x];
-          row_done[x] += stop;
-          stops[x] = stop;
+    for (uint32_t c = begin; c < end && remaining > 0; c += kChunkSplats) {
+      RowInt row_bits{};  // bit k of row y: chunk splat k reaches row y
+      int count = 0;
+      for (uint32_t s = c; s < std::min(end, c + kChunkSplats); ++s) {
+        prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
+        const Splat<T>& sp = splats[f.sorted_ids[s]];
+        const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
+        // Written always, kept only if it reaches a row: whether it does is a coin toss (about
+        // half of all intersections reach none), and a branch on it would mispredict.
+        chunk[count] = sp;
+        chunk_next_last[count] = static_cast<int32_t>(s + 1);
+        row_bits |= (row_index >= rows.y0 && row_index < rows.y1) ? int32_t(1u << count) : 0;
+        count += rows.y0 < rows.y1;
+      }
+      for (int j = 0; j < kBlocks; ++j) {
+        const int y0 = j * kBlockRows;
+        uint32_t bits = 0;
+        for (int q = 0; q < kBlockRows; ++q) bits |= static_cast<uint32_t>(row_bits[y0 + q]);
+        if (block_live[j] == 0 || bits == 0) continue;
+        V t[kBlockRows], r[kBlockRows], g[kBlockRows], b[kBlockRows], z[kBlockRows], py[kBlockRows];
+        RowMask done[kBlockRows], l[kBlockRows];
+        for (int q = 0; q < kBlockRows; ++q) {
+          t[q] = trans[y0 + q], r[q] = acc_r[y0 + q], g[q] = acc_g[y0 + q], b[q] = acc_b[y0 + q];
+          z[q] = acc_z[y0 + q], done[q] = row_done[y0 + q], l[q] = last[y0 + q];
+          py[q] = V{} + (T(geo.y0 + y0 + q) + T(0.5));
         }
-        if (!any_positive(stops)) continue;  // pixels finish rarely: count only when one did
-        int live = 0;
-        for (int x = 0; x < kTile; ++x) live += row_done[x] == 0;
-        const int finished = row_live[y] - live;
-        row_live[y] = live;
-        remaining -= finished;
+        for (; bits != 0; bits &= bits - 1) {
+          const int k = std::countr_zero(bits);
+          const Splat<T>& sp = chunk[k];
+          RowMask stopped{};
+#pragma GCC unroll 4
+          for (int q = 0; q < kBlockRows; ++q) {
+            const PixelEval<V> e = eval_pixel(sp, px, py[q]);
+            const V next_t = t[q] * (1 - e.alpha);
+            // Lanes where the splat blends into a still-compositing pixel: the pixel keeps
+            // compositing or, where transmittance falls to the cut-off, stops without it.
+            const RowMask blends = (e.alpha >= T(io::kAlphaMin)) & ~done[q];
+            const RowMask keep = blends & (next_t > T(io::kTransmittanceMin));
+            const RowMask stop = blends & ~keep;
+            const V weight = keep ? e.alpha * t[q] : T(0);
+            r[q] += weight * sp.r;
+            g[q] += weight * sp.g;
+            b[q] += weight * sp.b;
+            z[q] += weight * sp.z;
+            t[q] = keep ? next_t : t[q];
+            l[q] = keep ? chunk_next_last[k] : l[q];
+            done[q] |= stop;
+            stopped |= stop;
+          }
+          if (!any_lane(stopped)) continue;  // pixels finish rarely: count only when one did
+          int live_now = 0;
+          for (int q = 0; q < kBlockRows; ++q)
+            for (int x = 0; x < kTile; ++x) live_now += done[q][x] == 0;
+          remaining -= block_live[j] - live_now;
+          block_live[j] = live_now;
+          if (live_now == 0) break;
+        }
+        for (int q = 0; q < kBlockRows; ++q) {
+          trans[y0 + q] = t[q], acc_r[y0 + q] = r[q], acc_g[y0 + q] = g[q], acc_b[y0 + q] = b[q];
+          acc_z[y0 + q] = z[q], row_done[y0 + q] = done[q], last[y0 + q] = l[q];
+        }
       }
     }
     for (int y = 0; y < geo.height; ++y) {
       for (int x = 0; x < geo.width; ++x) {
-        const int p = y * kTile + x;
         const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
-        f.rgb[o * 3] = acc_r[p] + trans[p] * bg[0];
-        f.rgb[o * 3 + 1] = acc_g[p] + trans[p] * bg[1];
-        f.rgb[o * 3 + 2] = acc_b[p] + trans[p] * bg[2];
-        f.alpha[o] = 1 - trans[p];
-        f.depth[o] = acc_z[p];
-        f.depth_normalized[o] = f.alpha[o] > 0 ? acc_z[p] / f.alpha[o] : T(0);
-        f.last_contributor[o] = static_cast<uint32_t>(last[p]);
-        f.final_transmittance[o] = trans[p];
+        f.rgb[o * 3] = acc_r[y][x] + trans[y][x] * bg[0];
+        f.rgb[o * 3 + 1] = acc_g[y][x] + trans[y][x] * bg[1];
+        f.rgb[o * 3 + 2] = acc_b[y][x] + trans[y][x] * bg[2];
+        f.alpha[o] = 1 - trans[y][x];
+        f.depth[o] = acc_z[y][x];
+        f.depth_normalized[o] = f.alpha[o] > 0 ? acc_z[y][x] / f.alpha[o] : T(0);
+        f.last_contributor[o] = static_cast<uint32_t>(last[y][x]);
+        f.final_transmittance[o] = trans[y][x];
       }
     }
   });

@@ -17,20 +17,24 @@ class CpuRasterizer final : public Rasterizer {
 
   ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
                         const RenderSettings& settings) override {
-    return reference_forward(gaussians, camera, settings, pool_);
+    return reference_forward(gaussians, camera, settings, pool_, &stage_times_);
   }
 
   BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) override {
-    return reference_backward(forward, d_image, pool_, &scratch_);
+    return reference_backward(forward, d_image, pool_, &scratch_, &stage_times_);
   }
 
   std::vector<float> pose_jacobian(const ForwardResult& forward) override {
     return reference_pose_jacobian(forward, pool_);
   }
 
+  std::map<std::string, double> stage_times_ms() const override { return stage_times_; }
+  void reset_stage_times() override { stage_times_.clear(); }
+
  private:
   ThreadPool pool_;
   BackwardScratch<float> scratch_;
+  StageTimes stage_times_;
 };
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include <chrono>
 #include <string>
 
 #include "cpu/stages.h"
@@ -5,34 +6,55 @@
 #include "splat/error.h"
 
 namespace splat {
+namespace {
+
+// Runs one stage, adding its wall time to `times` under `name` where times are kept.
+template <typename Fn>
+auto timed(StageTimes* times, const char* name, Fn&& stage) {
+  const auto start = std::chrono::steady_clock::now();
+  struct AddOnExit {
+    StageTimes* times;
+    const char* name;
+    std::chrono::steady_clock::time_point start;
+    ~AddOnExit() {
+      if (times) {
+        (*times)[name] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      }
+    }
+  } add{times, name, start};
+  return stage();
+}
+
+}  // namespace
 
 template <typename Scalar>
 ForwardResultT<Scalar> reference_forward(const GaussiansViewT<Scalar>& gaussians,
                                          const Camera& camera, const RenderSettings& settings,
-                                         ThreadPool& pool) {
+                                         ThreadPool& pool, StageTimes* times) {
   validate(gaussians, "rasterize");
   camera.validate("rasterize");
   ForwardResultT<Scalar> frame;
   frame.gaussians = gaussians;
   frame.camera = camera;
   frame.settings = settings;
-  cpu::project_forward(frame, pool);
-  cpu::bin_and_sort(frame, pool);
-  cpu::composite_forward(frame, pool);
+  timed(times, "project", [&] { cpu::project_forward(frame, pool); });
+  timed(times, "sort_and_bin", [&] { cpu::bin_and_sort(frame, pool); });
+  timed(times, "composite", [&] { cpu::composite_forward(frame, pool); });
   return frame;
 }
 
 template <typename Scalar>
 BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward,
                                            const ImageGradsT<Scalar>& d_image, ThreadPool& pool,
-                                           BackwardScratch<Scalar>* scratch) {
+                                           BackwardScratch<Scalar>* scratch, StageTimes* times) {
   validate_image_grads(forward, d_image);
   BackwardResultT<Scalar> out;
   BackwardScratch<Scalar> local;
   BackwardScratch<Scalar>& memory = scratch ? *scratch : local;
-  const cpu::ScreenGrads<Scalar> screen =
-      cpu::composite_backward(forward, d_image, pool, memory.intersections);
-  cpu::project_backward(forward, screen, out, pool);
+  const cpu::ScreenGrads<Scalar> screen = timed(times, "composite_backward", [&] {
+    return cpu::composite_backward(forward, d_image, pool, memory.intersections);
+  });
+  timed(times, "project_backward", [&] { cpu::project_backward(forward, screen, out, pool); });
   return out;
 }
 
@@ -44,14 +66,14 @@ std::vector<Scalar> reference_pose_jacobian(const ForwardResultT<Scalar>& forwar
 template std::vector<float> reference_pose_jacobian(const ForwardResultT<float>&, ThreadPool&);
 template std::vector<double> reference_pose_jacobian(const ForwardResultT<double>&, ThreadPool&);
 template ForwardResultT<float> reference_forward(const GaussiansViewT<float>&, const Camera&,
-                                                 const RenderSettings&, ThreadPool&);
+                                                 const RenderSettings&, ThreadPool&, StageTimes*);
 template ForwardResultT<double> reference_forward(const GaussiansViewT<double>&, const Camera&,
-                                                  const RenderSettings&, ThreadPool&);
+                                                  const RenderSettings&, ThreadPool&, StageTimes*);
 template BackwardResultT<float> reference_backward(const ForwardResultT<float>&,
                                                    const ImageGradsT<float>&, ThreadPool&,
-                                                   BackwardScratch<float>*);
+                                                   BackwardScratch<float>*, StageTimes*);
 template BackwardResultT<double> reference_backward(const ForwardResultT<double>&,
                                                     const ImageGradsT<double>&, ThreadPool&,
-                                                    BackwardScratch<double>*);
+                                                    BackwardScratch<double>*, StageTimes*);
 
 }  // namespace splat
