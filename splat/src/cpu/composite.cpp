@@ -11,6 +11,7 @@
 #include <immintrin.h>
 #endif
 
+#include "cpu/footprint.h"
 #include "cpu/stages.h"
 #include "shader_io.h"
 
@@ -20,52 +21,6 @@ namespace {
 // Gradient slots per intersection in the backward pass (the order of shader_io.h).
 enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
 static_assert(kSlots == io::kGradSlots && kOpacity == io::kSlotOpacity && kZ == io::kSlotDepth);
-
-constexpr int kTile = static_cast<int>(io::kTileSize);
-constexpr int kTilePixels = kTile * kTile;
-
-// One splat's screen parameters and culling bounds, packed so that an intersection costs one
-// memory access: tiles read splats in depth order, which scatters across the per-Gaussian arrays.
-template <typename T>
-struct alignas(64) Splat {
-  T mx, my;       // 2D mean, pixels
-  T ca, cb, cc;   // conic
-  T opacity;
-  T r, g, b, z;   // colour and camera depth
-  // alpha >= kAlphaMin needs sigma <= ln(opacity / kAlphaMin); `limit` adds kCullSlack to that.
-  // sigma <= limit is an ellipse reaching +-half_v rows above and below the mean, with its top
-  // point at u = u_top; reach_rows also needs 2 c limit, det and 1 / c (no divide per tile).
-  T limit, det, half_v, u_top, cut_c, inv_cc;
-};
-static_assert(sizeof(Splat<float>) == 64, "one cache line per splat");
-
-// Culling keeps pixels down to alpha = exp(-kCullSlack) kAlphaMin, so that rounding in the
-// bounds below can never cull a pixel the pixel loop would blend.
-inline constexpr double kCullSlack = 0.05;
-
-template <typename T>
-Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
-  Splat<T> sp{};
-  sp.mx = f.means2d[id * 2];
-  sp.my = f.means2d[id * 2 + 1];
-  sp.ca = f.conics[id * 3];
-  sp.cb = f.conics[id * 3 + 1];
-  sp.cc = f.conics[id * 3 + 2];
-  sp.opacity = f.opacities[id];
-  sp.r = f.colors[id * 3];
-  sp.g = f.colors[id * 3 + 1];
-  sp.b = f.colors[id * 3 + 2];
-  sp.z = f.depths[id];
-  sp.limit = std::log(sp.opacity / T(io::kAlphaMin)) + T(kCullSlack);
-  sp.det = sp.ca * sp.cc - sp.cb * sp.cb;
-  // 0.5 d^T Q d <= limit reaches |dv| <= sqrt(2 limit (Q^-1)_yy); -1 marks "reaches nothing".
-  const bool reaches = sp.limit > 0 && sp.det > 0 && sp.ca > 0 && sp.cc > 0;
-  sp.half_v = reaches ? std::sqrt(2 * sp.limit * sp.ca / sp.det) : T(-1);
-  sp.u_top = reaches ? -sp.cb * sp.half_v / sp.ca : T(0);
-  sp.cut_c = 2 * sp.cc * sp.limit;
-  sp.inv_cc = reaches ? 1 / sp.cc : T(0);
-  return sp;
-}
 
 // Every visible splat packed, indexed by Gaussian id (culled ones are never read). The table
 // lives in the calling thread's storage and is reused by its next call: at 1M Gaussians it is
@@ -95,35 +50,6 @@ template <typename T>
 [[gnu::always_inline]] inline void prefetch_splat(const Splat<T>* splats, const uint32_t* ids, int64_t s, int64_t lo,
                            int64_t hi) {
   if (s >= lo && s < hi) __builtin_prefetch(splats + ids[s]);
-}
-
-// The tile rows [y0, y1) in which some pixel can reach alpha >= kAlphaMin; the loops below
-// evaluate those rows whole (16 pixels, one vector), which equals evaluating the whole tile.
-// In offsets (u, v) from the mean, sigma <= limit is an ellipse. Its intersection with the
-// strip between the tile's first and last pixel centres is convex, so its rows are one
-// interval: up to the ellipse's top point (u = -b v / a) where that lies in the strip, else up
-// to where the nearer strip edge cuts the ellipse; likewise down to the bottom point.
-struct RowRange {
-  int y0 = 0, y1 = 0;
-};
-
-template <typename T>
-inline RowRange reach_rows(const Splat<T>& sp, int tile_x0, int tile_y0) {
-  if (sp.half_v < 0) return {};
-  const T u0 = T(tile_x0) + T(0.5) - sp.mx, u1 = u0 + T(kTile - 1);
-  // v where the line at u cuts the ellipse: (-b u +- sqrt(2 c limit - det u^2)) / c, or +-half_v
-  // where the extreme point lies in the strip (selects, not branches: they mispredict).
-  const T u_hi = std::clamp(sp.u_top, u0, u1), u_lo = std::clamp(-sp.u_top, u0, u1);
-  const bool top_in = u_hi == sp.u_top, bottom_in = u_lo == -sp.u_top;
-  const T disc_hi = sp.cut_c - sp.det * u_hi * u_hi, disc_lo = sp.cut_c - sp.det * u_lo * u_lo;
-  if (!((top_in || disc_hi >= 0) && (bottom_in || disc_lo >= 0))) return {};  // strip misses it
-  const T cut_hi = (-sp.cb * u_hi + std::sqrt(std::max(disc_hi, T(0)))) * sp.inv_cc;
-  const T cut_lo = (-sp.cb * u_lo - std::sqrt(std::max(disc_lo, T(0)))) * sp.inv_cc;
-  const T v_hi = top_in ? sp.half_v : cut_hi, v_lo = bottom_in ? -sp.half_v : cut_lo;
-  // Row y (centre tile_y0 + y + 0.5) is inside when my + v_lo <= centre <= my + v_hi.
-  const T lo = sp.my + v_lo - T(tile_y0) - T(0.5), hi = sp.my + v_hi - T(tile_y0) - T(0.5);
-  return {static_cast<int>(std::clamp(std::ceil(lo), T(0), T(kTile))),
-          static_cast<int>(std::clamp(std::floor(hi) + 1, T(0), T(kTile)))};
 }
 
 // Per-pixel evaluation shared by forward and backward: offset, Mahalanobis term and alpha.
@@ -313,13 +239,13 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       for (uint32_t s = c; s < std::min(end, c + kChunkSplats); ++s) {
         prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
         const Splat<T>& sp = splats[f.sorted_ids[s]];
-        const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
+        const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
         // Written always, kept only if it reaches a row: whether it does is a coin toss (about
         // half of all intersections reach none), and a branch on it would mispredict.
         chunk[count] = sp;
         chunk_next_last[count] = static_cast<int32_t>(s + 1);
-        row_bits |= (row_index >= rows.y0 && row_index < rows.y1) ? int32_t(1u << count) : 0;
-        count += rows.y0 < rows.y1;
+        row_bits |= (row_index >= rows.first && row_index < rows.end) ? int32_t(1u << count) : 0;
+        count += rows.first < rows.end;
       }
       for (int j = 0; j < kBlocks; ++j) {
         const int y0 = j * kBlockRows;
@@ -453,10 +379,10 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
-      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
+      const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
       // Per-lane partial sums over the rows, reduced once per splat (in a fixed order).
       alignas(64) T lanes[kSlots][kTile] = {};
-      for (int y = rows.y0; y < rows.y1; ++y) {
+      for (int y = rows.first; y < rows.end; ++y) {
         if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
         const int row = y * kTile;
@@ -580,9 +506,9 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
-      const RowRange rows = reach_rows(sp, geo.x0, geo.y0);
+      const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
       const T* jac = &screen_jvp[static_cast<std::size_t>(id) * kScreenValues * 6];
-      for (int y = rows.y0; y < rows.y1; ++y) {
+      for (int y = rows.first; y < rows.end; ++y) {
         if (s >= row_max_last[y]) continue;
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
         const int row = y * kTile;
