@@ -344,86 +344,115 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
                    T(f.settings.background[2])};
   auto grad_at = [](const std::vector<T>& v, std::size_t i) { return v.empty() ? T(0) : v[i]; };
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
+  using V = Row<T>;
+  using RowMask = RowMaskOf<T>;
+
+  V lane{};
+  RowInt row_index{};
+  for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
-    // Per pixel: transmittance walking back to front, colour/depth accumulated behind the
+    // Per pixel row: transmittance walking back to front, colour/depth accumulated behind the
     // current splat, upstream gradients and the alpha/background term T_final (dA - bg.dC).
-    alignas(64) T trans[kTilePixels], behind_r[kTilePixels], behind_g[kTilePixels],
-        behind_b[kTilePixels], behind_z[kTilePixels], v_r[kTilePixels], v_g[kTilePixels],
-        v_b[kTilePixels], v_z[kTilePixels], v_final[kTilePixels];
-    alignas(64) int32_t last[kTilePixels];
-    int64_t row_max_last[kTile] = {};  // per row: one past the last splat any pixel used
-    for (int p = 0; p < kTilePixels; ++p) {
-      const int x = p % kTile, y = p / kTile;
-      trans[p] = 1;
-      behind_r[p] = behind_g[p] = behind_b[p] = behind_z[p] = 0;
-      v_r[p] = v_g[p] = v_b[p] = v_z[p] = v_final[p] = 0;
-      last[p] = 0;
-      if (x >= geo.width || y >= geo.height) continue;
-      const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
-      trans[p] = f.final_transmittance[o];
-      v_r[p] = grad_at(d_image.rgb, o * 3);
-      v_g[p] = grad_at(d_image.rgb, o * 3 + 1);
-      v_b[p] = grad_at(d_image.rgb, o * 3 + 2);
-      v_z[p] = grad_at(d_image.depth, o);
-      // rgb += T_final bg and alpha = 1 - T_final; dT_final/dalpha_j = -T_final / (1 - alpha_j).
-      v_final[p] = trans[p] * (grad_at(d_image.alpha, o) -
-                               (bg[0] * v_r[p] + bg[1] * v_g[p] + bg[2] * v_b[p]));
-      last[p] = static_cast<int32_t>(f.last_contributor[o]);
-      row_max_last[y] = std::max<int64_t>(row_max_last[y], last[p]);
-    }
-    const uint32_t begin = f.tile_ranges[tile * 2];
-    for (int64_t s = int64_t(used_end[tile]) - 1; s >= int64_t(begin); --s) {
-      prefetch_splat(splats.data(), f.sorted_ids.data(), s - kPrefetchAhead, begin, s);  // back to front
-      const int32_t s32 = static_cast<int32_t>(s);
-      const uint32_t id = f.sorted_ids[s];
-      const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
-      const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
-      // Per-lane partial sums over the rows, reduced once per splat (in a fixed order).
-      alignas(64) T lanes[kSlots][kTile] = {};
-      for (int y = rows.first; y < rows.end; ++y) {
-        if (s >= row_max_last[y]) continue;  // no pixel of this row composited this splat
-        const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
-        const int row = y * kTile;
-#pragma omp simd
-        for (int x = 0; x < kTile; ++x) {
-          const int p = row + x;
-          const PixelEval<T> e = eval_pixel(sp, px0 + T(x), py);
-          const T live = blended(s32, last[p], e);
-          const T inv = live / (1 - e.alpha);
-          const T t = live > 0 ? trans[p] * inv : trans[p];  // transmittance in front of it
-          const T weight = live * e.alpha * t;
-          // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
-          const T v_alpha = (sp.r * t - behind_r[p] * inv) * v_r[p] +
-                            (sp.g * t - behind_g[p] * inv) * v_g[p] +
-                            (sp.b * t - behind_b[p] * inv) * v_b[p] +
-                            (sp.z * t - behind_z[p] * inv) * v_z[p] + v_final[p] * inv;
-          lanes[kR][x] += weight * v_r[p];
-          lanes[kG][x] += weight * v_g[p];
-          lanes[kB][x] += weight * v_b[p];
-          lanes[kZ][x] += weight * v_z[p];
-          behind_r[p] += weight * sp.r;
-          behind_g[p] += weight * sp.g;
-          behind_b[p] += weight * sp.b;
-          behind_z[p] += weight * sp.z;
-          trans[p] = t;
-          // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
-          const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
-          const T v_sigma = -smooth * sp.opacity * e.gauss * v_alpha;
-          lanes[kOpacity][x] += smooth * e.gauss * v_alpha;
-          lanes[kCa][x] += T(0.5) * e.dx * e.dx * v_sigma;
-          lanes[kCc][x] += T(0.5) * e.dy * e.dy * v_sigma;
-          lanes[kCb][x] += e.dx * e.dy * v_sigma;
-          lanes[kMx][x] += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
-          lanes[kMy][x] += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
-        }
+    V trans[kTile], behind_r[kTile], behind_g[kTile], behind_b[kTile], behind_z[kTile],
+        v_r[kTile], v_g[kTile], v_b[kTile], v_z[kTile], v_final[kTile];
+    RowMask last[kTile];
+    int32_t row_max_last[kTile];  // per row: one past the last splat any pixel used
+    for (int y = 0; y < kTile; ++y) {
+      trans[y] = V{} + 1;
+      behind_r[y] = behind_g[y] = behind_b[y] = behind_z[y] = V{};
+      v_r[y] = v_g[y] = v_b[y] = v_z[y] = v_final[y] = V{};
+      last[y] = RowMask{};
+      row_max_last[y] = 0;
+      for (int x = 0; x < std::min(geo.width, y < geo.height ? kTile : 0); ++x) {
+        const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
+        trans[y][x] = f.final_transmittance[o];
+        v_r[y][x] = grad_at(d_image.rgb, o * 3);
+        v_g[y][x] = grad_at(d_image.rgb, o * 3 + 1);
+        v_b[y][x] = grad_at(d_image.rgb, o * 3 + 2);
+        v_z[y][x] = grad_at(d_image.depth, o);
+        // rgb += T_final bg and alpha = 1 - T_final; dT_final/dalpha_j = -T_final / (1 - alpha_j).
+        v_final[y][x] = trans[y][x] * (grad_at(d_image.alpha, o) -
+                                       (bg[0] * v_r[y][x] + bg[1] * v_g[y][x] + bg[2] * v_b[y][x]));
+        last[y][x] = static_cast<int32_t>(f.last_contributor[o]);
+        row_max_last[y] = std::max<int32_t>(row_max_last[y], static_cast<int32_t>(last[y][x]));
       }
-      T* out = &isect[slot(tile, s)];
-      for (int k = 0; k < kSlots; ++k) {
-        T sum = 0;
-        for (int x = 0; x < kTile; ++x) sum += lanes[k][x];
-        out[k] = sum;
+    }
+    RowInt max_last{};
+    for (int y = 0; y < kTile; ++y) max_last[y] = row_max_last[y];
+    const V px = lane + (T(geo.x0) + T(0.5));
+    // Back to front in chunks, as the forward pass goes front to back: chunk splat k (the k-th
+    // from the back) reaches the rows of bit k, and its gradients add up per lane over the rows.
+    alignas(64) Splat<T> chunk[kChunkSplats];
+    int32_t chunk_pos[kChunkSplats];
+    V chunk_grads[kChunkSplats][kSlots];
+    const int32_t begin = static_cast<int32_t>(f.tile_ranges[tile * 2]);
+    for (int32_t c = static_cast<int32_t>(used_end[tile]); c > begin; c -= kChunkSplats) {
+      RowInt row_bits{};
+      int count = 0;
+      for (int32_t s = c - 1; s >= std::max(begin, c - kChunkSplats); --s) {
+        prefetch_splat(splats.data(), f.sorted_ids.data(), s - kPrefetchAhead, begin, s);
+        const Splat<T>& sp = splats[f.sorted_ids[s]];
+        const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
+        std::fill_n(&isect[slot(tile, s)], kSlots, T(0));  // kept if it reaches no pixel
+        // Written always, kept only if it reaches a row a pixel composited it in.
+        chunk[count] = sp;
+        chunk_pos[count] = s;
+        const RowInt reached = row_index >= rows.first && row_index < rows.end && s < max_last;
+        row_bits |= reached ? int32_t(1u << count) : 0;
+        count += any_lane(reached);
+      }
+      for (int k = 0; k < count; ++k)
+        for (int slot_k = 0; slot_k < kSlots; ++slot_k) chunk_grads[k][slot_k] = V{};
+      for (int y = 0; y < kTile; ++y) {
+        uint32_t bits = static_cast<uint32_t>(row_bits[y]);
+        if (bits == 0) continue;
+        const V py = V{} + (T(geo.y0 + y) + T(0.5));
+        V t_row = trans[y], br = behind_r[y], bgr = behind_g[y], bb = behind_b[y], bz = behind_z[y];
+        const V vr = v_r[y], vg = v_g[y], vb = v_b[y], vz = v_z[y], vf = v_final[y];
+        const RowMask l = last[y];
+        for (; bits != 0; bits &= bits - 1) {
+          const int k = std::countr_zero(bits);
+          const Splat<T>& sp = chunk[k];
+          const PixelEval<V> e = eval_pixel(sp, px, py);
+          // Where the forward pass blended this splat: in front of the pixel's last one.
+          const RowMask live = (chunk_pos[k] < l) & (e.alpha >= T(io::kAlphaMin));
+          const V inv = live ? T(1) / (1 - e.alpha) : T(0);
+          const V t = live ? t_row * inv : t_row;  // transmittance in front of it
+          const V weight = live ? e.alpha * t : T(0);
+          // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
+          const V v_alpha = (sp.r * t - br * inv) * vr + (sp.g * t - bgr * inv) * vg +
+                            (sp.b * t - bb * inv) * vb + (sp.z * t - bz * inv) * vz + vf * inv;
+          V* grads = chunk_grads[k];
+          grads[kR] += weight * vr;
+          grads[kG] += weight * vg;
+          grads[kB] += weight * vb;
+          grads[kZ] += weight * vz;
+          br += weight * sp.r;
+          bgr += weight * sp.g;
+          bb += weight * sp.b;
+          bz += weight * sp.z;
+          t_row = t;
+          // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
+          const RowMask smooth = live & (e.raw_alpha < T(io::kAlphaMax));
+          const V v_sigma = smooth ? -sp.opacity * e.gauss * v_alpha : T(0);
+          grads[kOpacity] += smooth ? e.gauss * v_alpha : T(0);
+          grads[kCa] += T(0.5) * e.dx * e.dx * v_sigma;
+          grads[kCc] += T(0.5) * e.dy * e.dy * v_sigma;
+          grads[kCb] += e.dx * e.dy * v_sigma;
+          grads[kMx] += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
+          grads[kMy] += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
+        }
+        trans[y] = t_row, behind_r[y] = br, behind_g[y] = bgr, behind_b[y] = bb, behind_z[y] = bz;
+      }
+      for (int k = 0; k < count; ++k) {
+        T* out = &isect[slot(tile, chunk_pos[k])];
+        for (int slot_k = 0; slot_k < kSlots; ++slot_k) {
+          T sum = 0;
+          for (int x = 0; x < kTile; ++x) sum += chunk_grads[k][slot_k][x];
+          out[slot_k] = sum;
+        }
       }
     }
   });
