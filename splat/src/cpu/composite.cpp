@@ -165,6 +165,15 @@ TileGeometry tile_geometry(int tile, int tiles_x, int image_w, int image_h) {
 
 }  // namespace
 
+using RowUint = uint32_t __attribute__((vector_size(kTile * sizeof(uint32_t))));
+
+// Stores a row's first `count` lanes (a whole row in one vector store where it fits the image).
+template <typename Out, typename Lanes>
+inline void store_row(Out* out, const Lanes& row, int count) {
+  static_assert(sizeof(Lanes) == kTile * sizeof(Out));
+  std::memcpy(out, &row, count == kTile ? sizeof(Lanes) : static_cast<std::size_t>(count) * sizeof(Out));
+}
+
 template <typename M>
 inline bool any_lane(M mask) {
   for (int x = 0; x < kTile; ++x)
@@ -297,16 +306,19 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       }
     }
     for (int y = 0; y < geo.height; ++y) {
+      const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + geo.x0;
+      const V alpha = 1 - trans[y];
+      const V red = acc_r[y] + trans[y] * bg[0], green = acc_g[y] + trans[y] * bg[1],
+              blue = acc_b[y] + trans[y] * bg[2];
+      store_row(&f.alpha[o], alpha, geo.width);
+      store_row(&f.depth[o], acc_z[y], geo.width);
+      store_row(&f.depth_normalized[o], alpha > 0 ? acc_z[y] / alpha : T(0), geo.width);
+      store_row(&f.final_transmittance[o], trans[y], geo.width);
+      store_row(&f.last_contributor[o], __builtin_convertvector(last[y], RowUint), geo.width);
       for (int x = 0; x < geo.width; ++x) {
-        const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + (geo.x0 + x);
-        f.rgb[o * 3] = acc_r[y][x] + trans[y][x] * bg[0];
-        f.rgb[o * 3 + 1] = acc_g[y][x] + trans[y][x] * bg[1];
-        f.rgb[o * 3 + 2] = acc_b[y][x] + trans[y][x] * bg[2];
-        f.alpha[o] = 1 - trans[y][x];
-        f.depth[o] = acc_z[y][x];
-        f.depth_normalized[o] = f.alpha[o] > 0 ? acc_z[y][x] / f.alpha[o] : T(0);
-        f.last_contributor[o] = static_cast<uint32_t>(last[y][x]);
-        f.final_transmittance[o] = trans[y][x];
+        f.rgb[(o + x) * 3] = red[x];
+        f.rgb[(o + x) * 3 + 1] = green[x];
+        f.rgb[(o + x) * 3 + 2] = blue[x];
       }
     }
   });
