@@ -1,5 +1,6 @@
-// Forward and forward+backward on the donut workload (bench/donut_workload.h), on every
-// backend that can run here (cpu; vulkan when a device exists), in one table.
+// Forward, forward+backward and forward+pose Jacobian (what Gauss-Newton tracking calls) on
+// the donut workload (bench/donut_workload.h), on every backend that can run here (cpu; vulkan
+// when a device exists), in one table.
 // Run: build/bench/rasterizer_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
@@ -32,7 +33,10 @@ splat::Rasterizer* backend(const std::string& name) {
   return r.get();
 }
 
-void run(benchmark::State& state, const std::string& backend_name, bool backward) {
+// What each timed iteration runs after the forward pass.
+enum class Then { kNothing, kBackward, kPoseJacobian };
+
+void run(benchmark::State& state, const std::string& backend_name, Then then) {
   const std::size_t count = static_cast<std::size_t>(state.range(0));
   const int width = static_cast<int>(state.range(1)), height = static_cast<int>(state.range(2));
   const gslam::bench::Workload* w = workload(count, width, height);
@@ -47,10 +51,15 @@ void run(benchmark::State& state, const std::string& backend_name, bool backward
   d_image.alpha.assign(pixels, 1e-3f);
   d_image.depth.assign(pixels, 1e-3f);
   splat::ForwardResult f;
+  std::vector<float> jacobian;  // reused, as tracking does
   rasterizer->reset_stage_times();
   for (auto _ : state) {
     f = rasterizer->forward(w->gaussians, w->camera, splat::images_only());
-    if (backward) benchmark::DoNotOptimize(rasterizer->backward(f, d_image));
+    if (then == Then::kBackward) benchmark::DoNotOptimize(rasterizer->backward(f, d_image));
+    if (then == Then::kPoseJacobian) {
+      rasterizer->pose_jacobian(f, jacobian);
+      benchmark::DoNotOptimize(jacobian.data());
+    }
     benchmark::DoNotOptimize(f.rgb.data());
   }
   // Outside the timed loop: at GPU speeds this scan would be a visible share of a forward.
@@ -89,8 +98,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vulkan backend not benchmarked: %s\n", e.what());
   }
   for (const std::string& name : backends) {
-    benchmark::RegisterBenchmark(("Forward/" + name).c_str(), run, name, false)->Apply(sizes);
-    benchmark::RegisterBenchmark(("ForwardBackward/" + name).c_str(), run, name, true)->Apply(sizes);
+    benchmark::RegisterBenchmark(("Forward/" + name).c_str(), run, name, Then::kNothing)->Apply(sizes);
+    benchmark::RegisterBenchmark(("ForwardBackward/" + name).c_str(), run, name, Then::kBackward)->Apply(sizes);
+    benchmark::RegisterBenchmark(("ForwardPoseJacobian/" + name).c_str(), run, name, Then::kPoseJacobian)
+        ->Apply(sizes);
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -100,7 +100,8 @@ TEST_P(RasterizerGradients, PoseJacobianMatchesFiniteDifferencesAndBackward) {
   const splat::RenderSettings& settings = settings_;
   splat::ThreadPool& pool = pool_;
   const auto forward = splat::reference_forward<double>(scene.gaussians, scene.camera, settings, pool);
-  const std::vector<double> jac = splat::reference_pose_jacobian<double>(forward, pool);
+  std::vector<double> jac;
+  splat::reference_pose_jacobian<double>(forward, pool, jac);
   const std::size_t pixels = forward.alpha.size();
   ASSERT_EQ(jac.size(), pixels * 5 * 6);
   const LinearLoss loss_of(scene.camera.width, scene.camera.height, param.seed + 100);

@@ -104,11 +104,12 @@ void warm_up(splat::Rasterizer& rasterizer, const splat::GaussiansView& map, con
              const TrackingConfig& config, TrackingResult& result) {
   const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
   double m[6] = {}, v[6] = {}, best = INFINITY;
+  std::vector<float> jacobian;
   Eigen::Isometry3d best_pose = result.T_cam_world;
   for (int it = 0; it < config.warmup_iterations; ++it) {
     const splat::ForwardResult render = rasterizer.forward(map, splat::posed(frame.camera, result.T_cam_world), splat::images_only());
     ++result.renders;
-    const std::vector<float> jacobian = rasterizer.pose_jacobian(render);
+    rasterizer.pose_jacobian(render, jacobian);
     const Linearization lin = linearize(render, &jacobian, frame, config);
     if (lin.overlap <= 0) break;
     // Mean cost per used pixel: the pixel set changes from step to step.
@@ -144,6 +145,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
   }
   TrackingResult result;
   result.T_cam_world = initial;
+  std::vector<float> jacobian;  // reused across levels and iterations
   for (std::size_t level = 0; level < config.pyramid.size(); ++level) {
     const splat::RgbdFrame scaled = splat::downsample(frame, config.pyramid[level]);
     TrackingConfig level_config = config;
@@ -154,7 +156,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
     };
     if (level == 0) warm_up(rasterizer, map, scaled, level_config, result);
     splat::ForwardResult render = render_at(result.T_cam_world);
-    std::vector<float> jacobian = rasterizer.pose_jacobian(render);
+    rasterizer.pose_jacobian(render, jacobian);
     Linearization lin = linearize(render, &jacobian, scaled, level_config);
     double lambda = 1e-4;  // Levenberg-Marquardt damping, relative to diag(H)
     for (int it = 0; it < config.iterations[level] && lin.overlap > 0; ++it) {
@@ -172,7 +174,7 @@ TrackingResult track_frame(splat::Rasterizer& rasterizer, const splat::Gaussians
         const bool small = delta.head<3>().norm() < config.min_step_translation &&
                            delta.tail<3>().norm() < config.min_step_rotation;
         render = std::move(next);
-        jacobian = rasterizer.pose_jacobian(render);
+        rasterizer.pose_jacobian(render, jacobian);
         lin = linearize(render, &jacobian, scaled, level_config);
         if (small) break;
       } else {

@@ -31,9 +31,10 @@ BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward
                                            StageTimes* times = nullptr);
 
 // Jacobian of every output pixel with respect to the camera pose (left perturbation
-// T_cam_world <- exp([v, w]) T_cam_world), by forward-mode differentiation:
-// [H, W, 5, 6] for (r, g, b, depth, alpha) x (v, w).
+// T_cam_world <- exp([v, w]) T_cam_world), by forward-mode differentiation, into `jacobian`
+// (resized, every element overwritten): [H, W, 5, 6] for (r, g, b, depth, alpha) x (v, w).
 template <typename Scalar>
-std::vector<Scalar> reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool);
+void reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool,
+                             std::vector<Scalar>& jacobian, StageTimes* times = nullptr);
 
 }  // namespace splat

@@ -118,8 +118,10 @@ class Rasterizer {
   // Throws splat::Error if the image gradients do not match the forward result's size.
   virtual BackwardResult backward(const ForwardResult& forward, const ImageGrads& d_image) = 0;
   // Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the camera pose (the left
-  // perturbation above), [H, W, 5, 6]: what Gauss-Newton pose tracking needs.
-  virtual std::vector<float> pose_jacobian(const ForwardResult& forward) = 0;
+  // perturbation above), [H, W, 5, 6]: what Gauss-Newton pose tracking needs. `jacobian` is
+  // resized and overwritten; passing the same vector call after call reuses its memory (at
+  // 640x480 it is 37 MB, which would otherwise be mapped and zeroed on every call).
+  virtual void pose_jacobian(const ForwardResult& forward, std::vector<float>& jacobian) = 0;
   // Device memory the backend holds now, in bytes (0 for the CPU backend).
   virtual std::size_t device_memory_bytes() const { return 0; }
   // Time per stage since the last reset, in milliseconds, where the backend can measure it:

@@ -527,11 +527,11 @@ template ScreenGrads<double> composite_backward(const ForwardResultT<double>&,
                                                 std::vector<double>&);
 
 template <typename T>
-std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen_jvp,
-                                  ThreadPool& pool) {
+void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen_jvp, ThreadPool& pool,
+                        std::vector<T>& out) {
   const int w = f.width, h = f.height;
   constexpr int kOut = 5;  // r, g, b, depth, alpha
-  std::vector<T> out(static_cast<std::size_t>(w) * h * kOut * 6, T(0));
+  out.resize(static_cast<std::size_t>(w) * h * kOut * 6);  // no clearing: every pixel is written
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
@@ -560,6 +560,11 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
     for (int y = 0; y < kTile; ++y) max_last = std::max(max_last, row_max_last[y]);
     for (int64_t s = f.tile_ranges[tile * 2]; s < max_last; ++s) {
       prefetch_splat(splats.data(), f.sorted_ids.data(), s + kPrefetchAhead, s, max_last);
+      if (s + kPrefetchAhead < max_last) {  // and its screen Jacobian, 216 bytes
+        const char* ahead = reinterpret_cast<const char*>(
+            &screen_jvp[static_cast<std::size_t>(f.sorted_ids[s + kPrefetchAhead]) * kScreenValues * 6]);
+        for (std::size_t line = 0; line < kScreenValues * 6 * sizeof(T); line += 64) __builtin_prefetch(ahead + line);
+      }
       const int32_t s32 = static_cast<int32_t>(s);
       const uint32_t id = f.sorted_ids[s];
       const Splat<T> sp = splats[id];  // a copy: a reference could alias the pixel rows
@@ -610,12 +615,11 @@ std::vector<T> composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<
       }
     }
   });
-  return out;
 }
 
-template std::vector<float> composite_pose_jvp(const ForwardResultT<float>&, const std::vector<float>&,
-                                               ThreadPool&);
-template std::vector<double> composite_pose_jvp(const ForwardResultT<double>&,
-                                                const std::vector<double>&, ThreadPool&);
+template void composite_pose_jvp(const ForwardResultT<float>&, const std::vector<float>&, ThreadPool&,
+                                 std::vector<float>&);
+template void composite_pose_jvp(const ForwardResultT<double>&, const std::vector<double>&, ThreadPool&,
+                                 std::vector<double>&);
 
 }  // namespace splat::cpu

@@ -24,8 +24,8 @@ class CpuRasterizer final : public Rasterizer {
     return reference_backward(forward, d_image, pool_, &scratch_, &stage_times_);
   }
 
-  std::vector<float> pose_jacobian(const ForwardResult& forward) override {
-    return reference_pose_jacobian(forward, pool_);
+  void pose_jacobian(const ForwardResult& forward, std::vector<float>& jacobian) override {
+    reference_pose_jacobian(forward, pool_, jacobian, &stage_times_);
   }
 
   std::map<std::string, double> stage_times_ms() const override { return stage_times_; }

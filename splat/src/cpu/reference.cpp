@@ -59,12 +59,17 @@ BackwardResultT<Scalar> reference_backward(const ForwardResultT<Scalar>& forward
 }
 
 template <typename Scalar>
-std::vector<Scalar> reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool) {
-  return cpu::composite_pose_jvp(forward, cpu::project_pose_jvp(forward, pool), pool);
+void reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& pool,
+                             std::vector<Scalar>& jacobian, StageTimes* times) {
+  const std::vector<Scalar> screen =
+      timed(times, "project_pose_jvp", [&] { return cpu::project_pose_jvp(forward, pool); });
+  timed(times, "composite_pose_jvp", [&] { cpu::composite_pose_jvp(forward, screen, pool, jacobian); });
 }
 
-template std::vector<float> reference_pose_jacobian(const ForwardResultT<float>&, ThreadPool&);
-template std::vector<double> reference_pose_jacobian(const ForwardResultT<double>&, ThreadPool&);
+template void reference_pose_jacobian(const ForwardResultT<float>&, ThreadPool&, std::vector<float>&,
+                                      StageTimes*);
+template void reference_pose_jacobian(const ForwardResultT<double>&, ThreadPool&, std::vector<double>&,
+                                      StageTimes*);
 template ForwardResultT<float> reference_forward(const GaussiansViewT<float>&, const Camera&,
                                                  const RenderSettings&, ThreadPool&, StageTimes*);
 template ForwardResultT<double> reference_forward(const GaussiansViewT<double>&, const Camera&,

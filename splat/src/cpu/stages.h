@@ -53,9 +53,10 @@ inline constexpr int kScreenValues = static_cast<int>(io::kScreenValues);
 template <typename T>
 std::vector<T> project_pose_jvp(const ForwardResultT<T>& frame, ThreadPool& pool);
 
-// Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the pose: [H, W, 5, 6].
+// Per-pixel Jacobian of (r, g, b, depth, alpha) with respect to the pose: [H, W, 5, 6], into
+// `out` (resized; every element written).
 template <typename T>
-std::vector<T> composite_pose_jvp(const ForwardResultT<T>& frame, const std::vector<T>& screen_jvp,
-                                  ThreadPool& pool);
+void composite_pose_jvp(const ForwardResultT<T>& frame, const std::vector<T>& screen_jvp,
+                        ThreadPool& pool, std::vector<T>& out);
 
 }  // namespace splat::cpu

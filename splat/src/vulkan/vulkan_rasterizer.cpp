@@ -271,7 +271,7 @@ class VulkanRasterizer final : public Rasterizer {
     return out;
   }
 
-  std::vector<float> pose_jacobian(const ForwardResult& forward) override {
+  void pose_jacobian(const ForwardResult& forward, std::vector<float>& out) override {
     std::lock_guard lock(mutex_);
     std::shared_ptr<FrameState> state = state_of(forward);
     FrameState& s = *state;
@@ -287,10 +287,8 @@ class VulkanRasterizer final : public Rasterizer {
                     {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities,
                      &s.colors, &s.depths, &s.last, &screen_jvp_, &jacobian_},
                     {}, s.tiles_x, s.tiles_y);
-    std::vector<float> out;
     download_into(batch_, jacobian_, out, values);
     batch_.run();
-    return out;
   }
 
  private:
