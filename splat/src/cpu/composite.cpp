@@ -574,6 +574,16 @@ void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen
         if (s >= row_max_last[y]) continue;
         const T py = T(geo.y0 + y) + T(0.5), px0 = T(geo.x0) + T(0.5);
         const int row = y * kTile;
+        // d sigma along direction k, with J_i the tangents of (mean x, mean y, conic a, b, c):
+        // (a dx + b dy) J_0 + (c dy + b dx) J_1 + dx^2/2 J_2 + dx dy J_3 + dy^2/2 J_4, a
+        // quadratic in dx whose coefficients are fixed along the row.
+        const T dy = sp.my - py;
+        T quad[6], lin[6], con[6];
+        for (int k = 0; k < 6; ++k) {
+          quad[k] = T(0.5) * jac[2 * 6 + k];
+          lin[k] = sp.ca * jac[0 * 6 + k] + sp.cb * jac[1 * 6 + k] + dy * jac[3 * 6 + k];
+          con[k] = dy * (sp.cb * jac[0 * 6 + k] + sp.cc * jac[1 * 6 + k] + T(0.5) * dy * jac[4 * 6 + k]);
+        }
 #pragma omp simd
         for (int x = 0; x < kTile; ++x) {
           const int p = row + x;
@@ -582,13 +592,9 @@ void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen
           const T smooth = e.raw_alpha < T(io::kAlphaMax) ? live : T(0);
           const T weight = live * e.alpha * trans[p];
           const T inv = live / (1 - e.alpha);
-          // dsigma/d(mean x, mean y, conic a, b, c) at this pixel.
-          const T ds[5] = {sp.ca * e.dx + sp.cb * e.dy, sp.cc * e.dy + sp.cb * e.dx, T(0.5) * e.dx * e.dx,
-                           e.dx * e.dy, T(0.5) * e.dy * e.dy};
 #pragma GCC unroll 6
           for (int k = 0; k < 6; ++k) {  // unrolled: a loop here would stop the pixel loop vectorizing
-            const T d_sigma = ds[0] * jac[0 * 6 + k] + ds[1] * jac[1 * 6 + k] + ds[2] * jac[2 * 6 + k] +
-                              ds[3] * jac[3 * 6 + k] + ds[4] * jac[4 * 6 + k];
+            const T d_sigma = (quad[k] * e.dx + lin[k]) * e.dx + con[k];
             const T d_alpha = -smooth * e.raw_alpha * d_sigma;
             const T d_weight = live * trans[p] * (d_alpha + e.alpha * d_log_t[k][p]);
             d_rgb[0][k][p] += d_weight * sp.r + weight * jac[6 * 6 + k];
