@@ -186,12 +186,15 @@ double dssim_loss(std::span<const T> pred, std::span<const T> target, int width,
       const T a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
       const T b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
       const T b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
-      const T s = a1 * a2 / (b1 * b2);
+      const T inv_b = 1 / (b1 * b2);
+      const T s = a1 * a2 * inv_b;
       ssim_sum += s;
-      // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale.
-      da[p] = -scale * s * (2 * my[p] / a1 - 2 * my[p] / a2 - 2 * mx[p] / b1 + 2 * mx[p] / b2);
+      // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale. Written
+      // without dividing by a1 or a2: a2 (twice the covariance plus C2) can be exactly 0, and
+      // s / a2 as s * (1 / a2) is then 0 * inf.
+      da[p] = -scale * (2 * my[p] * (a2 - a1) * inv_b + s * (2 * mx[p] / b2 - 2 * mx[p] / b1));
       db[p] = -scale * s * (-1 / b2);
-      dc[p] = -scale * s * (2 / a2);
+      dc[p] = -scale * 2 * a1 * inv_b;
     }
     // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
     blur(da, ga, tmp, width, height);
