@@ -56,10 +56,12 @@ int run_reconstruct(const ReconstructOptions& o) {
   if (config.refine_passes > 0 && refine_frames > 0) {
     const std::size_t visits = refine_frames * static_cast<std::size_t>(config.refine_passes);
     Progress refine_progress("refine", visits, "frame visits");
-    const std::size_t pruned = slam.refine_map(
+    const SlamSystem::Refinement refined = slam.refine_map(
         outputs.records(), [&](std::size_t i) { return dataset.load(i); },
         [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map().size()) + " Gaussians"); });
     refine_progress.finish();
+    outputs.update_poses(refined.T_world_cam);
+    const std::size_t pruned = refined.pruned;
     outputs.extra()["refinement"] = {{"frames", refine_frames}, {"passes", config.refine_passes},
                                      {"iterations_per_visit", config.refine_iterations}, {"pruned", pruned},
                                      {"seconds", refine_progress.elapsed_seconds()}};

@@ -24,6 +24,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
     get(j, "refine_passes", c.refine_passes);
     get(j, "refine_iterations", c.refine_iterations);
     get(j, "refine_all_frames", c.refine_all_frames);
+    get(j, "relocalize_iterations", c.relocalize_iterations);
     if (j.contains("tracking")) {
       const auto& t = j.at("tracking");
       get(t, "pyramid", c.tracking.pyramid);
@@ -47,6 +48,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "depth_alpha_threshold", c.mapping.depth_alpha_threshold);
       get(m, "refine_depth_alpha_threshold", c.mapping.refine_depth_alpha_threshold);
       get(m, "refine_learning_rate_scale", c.mapping.refine_learning_rate_scale);
+      get(m, "refine_pose_rate_scale", c.mapping.refine_pose_rate_scale);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());

@@ -75,21 +75,22 @@ std::vector<Mapper::Keyframe*> Mapper::window_for(Keyframe& newest) {
   return window;
 }
 
-void Mapper::step_pose(Keyframe& kf, const splat::PoseGradient& gradient) {
-  const bool moves = config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0;
-  if (!moves || kf.number == 0) return;  // the first keyframe is the world frame
+void Mapper::step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
+                       double rate_scale) const {
+  const bool moves = rate_scale > 0 && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0);
+  if (!moves) return;
   const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
-  const double t = ++kf.pose_steps;
+  const double t = ++adam.steps;
   splat::Vector6d delta = splat::Vector6d::Zero();
   for (int k = 0; k < 6; ++k) {
-    const double rate = k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate;
-    splat::adam_update(delta[k], gradient[k], kf.pose_m[k], kf.pose_v[k], rate, 1 - std::pow(hyper.beta1, t),
+    const double rate = rate_scale * (k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate);
+    splat::adam_update(delta[k], gradient[k], adam.m[k], adam.v[k], rate, 1 - std::pow(hyper.beta1, t),
                        1 - std::pow(hyper.beta2, t), hyper);
   }
-  kf.T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * kf.T_cam_world);
+  T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * T_cam_world);
 }
 
-double Mapper::optimize_step(Keyframe& kf, Step step) {
+double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   const splat::RgbdFrame& f = kf.frame;
   const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
   splat::ImageGrads d;
@@ -104,7 +105,11 @@ double Mapper::optimize_step(Keyframe& kf, Step step) {
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
                                                  config_.depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
-  if (step == Step::kWindow) step_pose(kf, backward.d_loss_d_pose);
+  if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
+    step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);
+  } else if (step == Step::kRefine && pose) {
+    step_pose(kf.T_cam_world, *pose, backward.d_loss_d_pose, config_.refine_pose_rate_scale);
+  }
   splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {
     // The three log scales move together (they start equal) and rotations stay fixed.
@@ -138,11 +143,12 @@ std::size_t Mapper::prune() {
   return removed;
 }
 
-double Mapper::refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, int iterations) {
+double Mapper::refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations) {
   if (map_.empty()) return 0;
   Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
   double loss = 0;
-  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine);
+  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
+  T_cam_world = kf.T_cam_world;
   return loss;
 }
 
@@ -163,7 +169,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
   for (int it = 0; it < config_.iterations && !map_.empty(); ++it) {
     Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
-    stats.final_loss = optimize_step(kf, Step::kWindow);
+    stats.final_loss = optimize_step(kf, Step::kWindow, nullptr);
     ++stats.iterations;
   }
   stats.pruned = prune();

@@ -121,6 +121,29 @@ TEST(SlamSystem, RealTeddySequencePrefixTrajectoryWithinOneCentimetre) {
   EXPECT_LT(e.ate_rmse, 0.01);  // 0.47 cm with keyframe poses refined
 }
 
+// Re-tracking the refined frames against the final map (SlamConfig::relocalize_iterations)
+// keeps the world frame where it is and the trajectory within a centimetre of the truth.
+TEST(SlamSystem, RelocalizationAfterRefinementKeepsTheTrajectoryClose) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 10);
+  auto rasterizer = splat::make_cpu_rasterizer();
+  app::SlamConfig config;
+  config.refine_passes = 1;
+  config.relocalize_iterations = 5;
+  app::SlamSystem slam(*rasterizer, config);
+  const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+  const app::SlamSystem::Refinement refined = slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); });
+  EXPECT_TRUE(refined.T_world_cam[0].isApprox(records[0].T_world_cam, 0));
+  std::vector<app::StampedPose> estimate, truth;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    estimate.push_back({records[i].timestamp, refined.T_world_cam[i]});
+    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+  }
+  const double ate = app::evaluate_trajectory(estimate, truth).ate_rmse;
+  std::printf("synthetic, %zu frames, relocalized: ATE %.3f cm\n", records.size(), 100 * ate);
+  EXPECT_LT(ate, 0.01);
+}
+
 }  // namespace
 
 namespace {
@@ -160,14 +183,37 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   const app::SlamConfig config;
   ASSERT_GT(config.refine_passes, 0);
   app::SlamSystem slam(*rasterizer, config);
-  const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+  std::vector<app::FrameRecord> records = process_all(slam, dataset);
   const double before = mean_psnr(*rasterizer, slam, dataset, records);
   std::size_t visits = 0, total = 0;
-  slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); },
-                  [&](std::size_t done, std::size_t all) {
-                    visits = done;
-                    total = all;
-                  });
+  const app::SlamSystem::Refinement refined =
+      slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); },
+                      [&](std::size_t done, std::size_t all) {
+                        visits = done;
+                        total = all;
+                      });
+  ASSERT_EQ(refined.T_world_cam.size(), records.size());
+  // The refined frames' poses moved with the map, but the first, which is the world frame.
+  ASSERT_GT(config.mapping.refine_pose_rate_scale, 0);
+  EXPECT_TRUE(refined.T_world_cam[0].isApprox(records[0].T_world_cam, 0));
+  auto ate = [&](const std::vector<app::FrameRecord>& poses) {
+    std::vector<app::StampedPose> estimate, truth;
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      estimate.push_back({poses[i].timestamp, poses[i].T_world_cam});
+      truth.push_back({poses[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+    }
+    return app::evaluate_trajectory(estimate, truth).ate_rmse;
+  };
+  const double ate_before = ate(records);
+  double largest_move = 0;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    largest_move = std::max(largest_move, (refined.T_world_cam[i].translation() - records[i].T_world_cam.translation()).norm());
+    records[i].T_world_cam = refined.T_world_cam[i];
+  }
+  const double ate_after = ate(records);
+  std::printf("synthetic, %zu frames: ATE %.3f -> %.3f cm after refinement, poses moved up to %.3f cm\n",
+              records.size(), 100 * ate_before, 100 * ate_after, 100 * largest_move);
+  EXPECT_GT(largest_move, 0);
   ASSERT_TRUE(config.refine_all_frames);
   EXPECT_EQ(slam.refine_frames(records).size(), records.size()) << "every frame was tracked";
   EXPECT_EQ(total, records.size() * static_cast<std::size_t>(config.refine_passes));

@@ -28,6 +28,9 @@ struct SlamConfig {
   // Sweep every tracked frame instead of the keyframes alone: more viewpoints for the same
   // number of steps.
   bool refine_all_frames = false;
+  // Then re-track every refined frame but the first against the final map, from its current
+  // pose, with this many Levenberg-Marquardt iterations at the finest tracking level (0: off).
+  int relocalize_iterations = 0;
   SlamConfig();
 };
 
@@ -77,16 +80,21 @@ class SlamSystem {
   FrameRecord process(const splat::RgbdFrame& frame);
   const splat::Gaussians& map() const { return mapper_.map(); }
   std::size_t keyframes_added() const { return keyframes_; }
-  // The final sweep (SlamConfig::refine_passes) over the keyframes, or all tracked frames
-  // (refine_all_frames), among `records` (as
-  // process() returned them, one per frame), each reloaded with load(frame index) when visited
-  // so memory stays bounded; a shuffled order, the same on every run. Then prunes. Calls
-  // visited(done, total) after each visit. Returns the number of Gaussians pruned.
   // The frames refine_map visits, by index into `records`.
   std::vector<std::size_t> refine_frames(const std::vector<FrameRecord>& records) const;
-  std::size_t refine_map(const std::vector<FrameRecord>& records,
-                         const std::function<splat::RgbdFrame(std::size_t)>& load,
-                         const std::function<void(std::size_t, std::size_t)>& visited = {});
+  // The final sweep (SlamConfig::refine_passes) over the keyframes, or all tracked frames
+  // (refine_all_frames), among `records` (as process() returned them, one per frame), each
+  // reloaded with load(frame index) when visited so memory stays bounded; a shuffled order, the
+  // same on every run. Visited frames but the first (the world frame) move with the map where
+  // MapperConfig::refine_pose_rate_scale > 0. Then prunes. Calls visited(done, total) after
+  // each visit.
+  struct Refinement {
+    std::size_t pruned = 0;
+    std::vector<Eigen::Isometry3d> T_world_cam;  // every record's pose after the sweep
+  };
+  Refinement refine_map(const std::vector<FrameRecord>& records,
+                        const std::function<splat::RgbdFrame(std::size_t)>& load,
+                        const std::function<void(std::size_t, std::size_t)>& visited = {});
   // Camera-to-world poses of every frame processed so far. Mapping may move keyframes
   // (MapperConfig::pose_learning_rate); each frame follows the keyframe it was tracked after.
   std::vector<Eigen::Isometry3d> trajectory() const;
@@ -101,6 +109,7 @@ class SlamSystem {
   void sync_keyframe_poses();
 
   SlamConfig config_;
+  splat::Rasterizer& rasterizer_;
   FrameTracker tracker_;
   mapping::Mapper mapper_;
   std::size_t keyframes_ = 0;

@@ -28,6 +28,9 @@ struct MapperConfig {
   double refine_depth_alpha_threshold = 1.0;
   // Adam's learning rates in the final refinement, relative to the window steps'.
   double refine_learning_rate_scale = 1.0;
+  // Pose steps in the final refinement, relative to the window steps' (pose_learning_rate,
+  // pose_rotation_learning_rate); 0 keeps each refined frame where tracking and mapping put it.
+  double refine_pose_rate_scale = 0;
   // Keep Gaussians isotropic (one scale, no rotation), as SplaTAM does. Off by default: on the
   // first 60 teddy frames anisotropic maps rendered better (24.6 vs 23.9 dB masked PSNR).
   bool isotropic = false;
@@ -48,6 +51,12 @@ struct MapperConfig {
   void validate() const;
 };
 
+// Adam state of one camera pose (se(3), left updates).
+struct PoseAdam {
+  Eigen::Matrix<double, 6, 1> m = Eigen::Matrix<double, 6, 1>::Zero(), v = m;
+  int steps = 0;
+};
+
 struct MappingStats {
   std::size_t added = 0, pruned = 0;
   int iterations = 0;
@@ -65,10 +74,12 @@ class Mapper {
   // over a window of covisible keyframes and prunes. The first keyframe seeds the map.
   MappingStats add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
 
-  // Final refinement: `iterations` Adam steps of the map on one earlier keyframe (at
-  // refine_resolution_factor), which the bounded keyframe store may have dropped. Sweeping every keyframe this
+  // Final refinement: `iterations` Adam steps of the map on one earlier frame (at
+  // refine_resolution_factor), which the bounded keyframe store may have dropped. Sweeping every frame this
   // way undoes what later windows did to regions they saw poorly. No densification or pruning.
-  double refine(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, int iterations);
+  // Where `pose` is given (and refine_pose_rate_scale > 0) the frame's pose moves with the map,
+  // with that Adam state; otherwise it stays.
+  double refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations);
   // Removes transparent and oversized Gaussians; returns how many.
   std::size_t prune();
 
@@ -82,18 +93,18 @@ class Mapper {
     splat::RgbdFrame frame;  // at the mapping resolution
     Eigen::Isometry3d T_cam_world;
     std::size_t number = 0;  // in the order added; 0 is the world frame
-    // Adam state of the pose.
-    Eigen::Matrix<double, 6, 1> pose_m = Eigen::Matrix<double, 6, 1>::Zero(), pose_v = pose_m;
-    int pose_steps = 0;
+    PoseAdam pose = {};
   };
   std::size_t densify(const Keyframe& kf);
   std::vector<Keyframe*> window_for(Keyframe& newest);
-  // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose;
-  // refinement steps keep it and use refine_depth_alpha_threshold.
+  // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose (but
+  // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose
+  // where `pose` is given.
   enum class Step { kWindow, kRefine };
-  double optimize_step(Keyframe& kf, Step step);
-  // One Adam step of a keyframe's pose (se(3), left update) from the loss's pose gradient.
-  void step_pose(Keyframe& kf, const splat::PoseGradient& gradient);
+  double optimize_step(Keyframe& kf, Step step, PoseAdam* pose);
+  // One Adam step of a pose from the loss's pose gradient, at `rate_scale` x the pose rates.
+  void step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
+                 double rate_scale) const;
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
