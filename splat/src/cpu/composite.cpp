@@ -125,14 +125,15 @@ inline V exp_nonpositive_float(V x) {
 inline float exp_nonpositive(float x) { return exp_nonpositive_float(x); }
 inline Row<float> exp_nonpositive(Row<float> x) { return exp_nonpositive_float(x); }
 inline double exp_nonpositive(double x) { return std::exp(x); }
-inline Row<double> exp_nonpositive(Row<double> x) {
-  for (int k = 0; k < kTile; ++k) x[k] = std::exp(x[k]);
-  return x;
+inline Row<double> exp_nonpositive(const Row<double>& x) {
+  Row<double> e;
+  for (int k = 0; k < kTile; ++k) e[k] = std::exp(x[k]);
+  return e;
 }
 
 // V is T for one pixel or a row vector of T for a tile row; the row's py is one value.
 template <typename T, typename V>
-inline PixelEval<V> eval_pixel(const Splat<T>& s, V px, T py) {
+inline PixelEval<V> eval_pixel(const Splat<T>& s, const V& px, T py) {
   PixelEval<V> e;
   const T dy = s.my - py;
   e.dx = s.mx - px;
@@ -190,7 +191,7 @@ inline void store_row(Out* out, const Lanes& row, int count) {
 }
 
 template <typename M>
-inline bool any_lane(M mask) {
+inline bool any_lane(const M& mask) {
   for (int x = 0; x < kTile; ++x)
     if (mask[x]) return true;
   return false;
@@ -198,7 +199,7 @@ inline bool any_lane(M mask) {
 #if defined(__AVX512F__)
 // Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
 template <>
-inline bool any_lane(RowMaskOf<float> mask) {
+inline bool any_lane(const RowMaskOf<float>& mask) {
   static_assert(sizeof(mask) % sizeof(__m512i) == 0);
   __m512i parts[sizeof(mask) / sizeof(__m512i)];
   std::memcpy(parts, &mask, sizeof(mask));
