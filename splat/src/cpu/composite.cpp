@@ -7,11 +7,8 @@
 #include <cstring>
 #include <iterator>
 
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
-
 #include "cpu/footprint.h"
+#include "cpu/lanes.h"
 #include "cpu/stages.h"
 #include "shader_io.h"
 
@@ -61,50 +58,6 @@ struct PixelEval {
   T alpha;  // min(kAlphaMax, opacity * gauss), or 0 where sigma < 0 (never blended)
   T raw_alpha;  // opacity * gauss before the cap
 };
-
-// One tile row of 16 pixels as one vector value (GCC vector extension). The forward pass keeps
-// its rows' compositing state in registers while it walks the splats that reach them.
-template <typename T>
-struct RowOf;
-template <>
-struct RowOf<float> {
-  typedef float type __attribute__((vector_size(kTile * sizeof(float))));
-  typedef int32_t mask __attribute__((vector_size(kTile * sizeof(float))));
-};
-template <>
-struct RowOf<double> {
-  typedef double type __attribute__((vector_size(kTile * sizeof(double))));
-  typedef int64_t mask __attribute__((vector_size(kTile * sizeof(double))));
-};
-template <typename T>
-using Row = typename RowOf<T>::type;
-// Integer lanes as wide as T's: comparisons give all ones (true) or zero.
-template <typename T>
-using RowMaskOf = typename RowOf<T>::mask;
-using RowInt = RowMaskOf<float>;
-
-// floor and p 2^n for float lanes, scalar or row; with AVX-512 one instruction each.
-inline float floor_lanes(float x) { return std::floor(x); }
-inline float scale_by_pow2(float p, float n) {  // n integral, 2^n normal
-  return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
-}
-#if defined(__AVX512F__)
-inline Row<float> floor_lanes(Row<float> x) {
-  return reinterpret_cast<Row<float>>(
-      _mm512_roundscale_ps(reinterpret_cast<__m512>(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
-}
-inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
-  return reinterpret_cast<Row<float>>(_mm512_scalef_ps(reinterpret_cast<__m512>(p), reinterpret_cast<__m512>(n)));
-}
-#else
-inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the range below keeps it
-  const Row<float> cut = __builtin_convertvector(__builtin_convertvector(x, RowInt), Row<float>);
-  return cut > x ? cut - 1 : cut;
-}
-inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
-  return p * reinterpret_cast<Row<float>>((__builtin_convertvector(n, RowInt) + 127) << 23);
-}
-#endif
 
 // exp(x) for x <= 0. Float: Cephes' range reduction and minimax polynomial (~2 ulp), written as
 // plain arithmetic so that it vectorizes (libm's expf does not without -ffast-math), for one
@@ -181,34 +134,6 @@ TileGeometry tile_geometry(int tile, int tiles_x, int image_w, int image_h) {
 
 }  // namespace
 
-using RowUint = uint32_t __attribute__((vector_size(kTile * sizeof(uint32_t))));
-
-// Stores a row's first `count` lanes (a whole row in one vector store where it fits the image).
-template <typename Out, typename Lanes>
-inline void store_row(Out* out, const Lanes& row, int count) {
-  static_assert(sizeof(Lanes) == kTile * sizeof(Out));
-  std::memcpy(out, &row, count == kTile ? sizeof(Lanes) : static_cast<std::size_t>(count) * sizeof(Out));
-}
-
-template <typename M>
-inline bool any_lane(const M& mask) {
-  for (int x = 0; x < kTile; ++x)
-    if (mask[x]) return true;
-  return false;
-}
-#if defined(__AVX512F__)
-// Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
-template <>
-inline bool any_lane(const RowMaskOf<float>& mask) {
-  static_assert(sizeof(mask) % sizeof(__m512i) == 0);
-  __m512i parts[sizeof(mask) / sizeof(__m512i)];
-  std::memcpy(parts, &mask, sizeof(mask));
-  __mmask16 any = 0;
-  for (const __m512i& part : parts) any |= _mm512_test_epi32_mask(part, part);
-  return any != 0;
-}
-#endif
-
 // The forward pass takes a tile's splats in chunks: it copies out those of a chunk that reach
 // the tile, with a bit per row saying which rows each one reaches; then each block of rows
 // walks its bits. Two rows per block give the out-of-order core two independent dependency
@@ -217,6 +142,47 @@ inline bool any_lane(const RowMaskOf<float>& mask) {
 inline constexpr int kChunkSplats = 32;
 inline constexpr int kBlockRows = 2;
 inline constexpr int kBlocks = kTile / kBlockRows;
+
+// One chunk of a tile's splats: copies in tile-list order, and the rows each reaches, found
+// for 16 splats at a time (the reach has two square roots; one splat at a time it was a
+// quarter of the forward's compositing).
+template <typename T>
+struct Chunk {
+  static_assert(kChunkSplats % kRowLanes == 0);
+  alignas(64) Splat<T> splat[kChunkSplats];
+  // The fields reach_rows reads, one array per field, so that lanes load as rows.
+  alignas(64) T mx[kChunkSplats], my[kChunkSplats], half[kChunkSplats], s_top[kChunkSplats],
+      cut[kChunkSplats], inv[kChunkSplats], b[kChunkSplats], det[kChunkSplats];
+  int32_t first[kChunkSplats], end[kChunkSplats];  // the reached rows [first, end)
+  int size = 0;
+
+  void add(const Splat<T>& sp) {
+    splat[size] = sp;
+    mx[size] = sp.mx, my[size] = sp.my, half[size] = sp.half_v, s_top[size] = sp.u_top;
+    cut[size] = sp.cut_c, inv[size] = sp.inv_cc, b[size] = sp.cb, det[size] = sp.det;
+    ++size;
+  }
+
+  void find_rows(int tile_x0, int tile_y0) {
+    using V = Row<T>;
+    for (int j = size; j < kChunkSplats; ++j) {  // unused lanes reach nothing
+      mx[j] = my[j] = s_top[j] = cut[j] = inv[j] = b[j] = det[j] = 0;
+      half[j] = -1;
+    }
+    auto load = [](const T* p) {
+      V v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    };
+    for (int j = 0; j < size; j += kRowLanes) {
+      const EllipseAxis<V> axis{load(half + j), load(s_top + j), load(cut + j), load(inv + j), load(b + j), load(det + j)};
+      const RowReach<V> rows = reach_rows(axis, load(mx + j), load(my + j), T(tile_x0), T(tile_y0));
+      const RowInt row_first = __builtin_convertvector(rows.first, RowInt), row_end = __builtin_convertvector(rows.end, RowInt);
+      std::memcpy(first + j, &row_first, sizeof row_first);
+      std::memcpy(end + j, &row_end, sizeof row_end);
+    }
+  }
+};
 
 template <typename T>
 void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
@@ -255,22 +221,26 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
     }
     int remaining = geo.width * geo.height;
     const V px = lane + (T(geo.x0) + T(0.5));
-    alignas(64) Splat<T> chunk[kChunkSplats];
+    Chunk<T> chunk;
+    const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, in order
     int32_t chunk_next_last[kChunkSplats];
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
     for (uint32_t c = begin; c < end && remaining > 0; c += kChunkSplats) {
-      RowInt row_bits{};  // bit k of row y: chunk splat k reaches row y
-      int count = 0;
+      chunk.size = 0;
       for (uint32_t s = c; s < std::min(end, c + kChunkSplats); ++s) {
         prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
-        const Splat<T>& sp = splats[f.sorted_ids[s]];
-        const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
+        chunk.add(splats[f.sorted_ids[s]]);
+      }
+      chunk.find_rows(geo.x0, geo.y0);
+      RowInt row_bits{};  // bit k of row y: kept splat k reaches row y
+      int count = 0;
+      for (int j = 0; j < chunk.size; ++j) {
         // Written always, kept only if it reaches a row: whether it does is a coin toss (about
         // half of all intersections reach none), and a branch on it would mispredict.
-        chunk[count] = sp;
-        chunk_next_last[count] = static_cast<int32_t>(s + 1);
-        row_bits |= (row_index >= rows.first && row_index < rows.end) ? int32_t(1u << count) : 0;
-        count += rows.first < rows.end;
+        kept[count] = &chunk.splat[j];
+        chunk_next_last[count] = static_cast<int32_t>(c + j + 1);
+        row_bits |= (row_index >= chunk.first[j] && row_index < chunk.end[j]) ? int32_t(1u << count) : 0;
+        count += chunk.first[j] < chunk.end[j];
       }
       for (int j = 0; j < kBlocks; ++j) {
         const int y0 = j * kBlockRows;
@@ -287,7 +257,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         }
         for (; bits != 0; bits &= bits - 1) {
           const int k = std::countr_zero(bits);
-          const Splat<T>& sp = chunk[k];
+          const Splat<T>& sp = *kept[k];
           RowMask stopped{};
 #pragma GCC unroll 4
           for (int q = 0; q < kBlockRows; ++q) {
@@ -413,22 +383,27 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     const V px = lane + (T(geo.x0) + T(0.5));
     // Back to front in chunks, as the forward pass goes front to back: chunk splat k (the k-th
     // from the back) reaches the rows of bit k, and its gradients add up per lane over the rows.
-    alignas(64) Splat<T> chunk[kChunkSplats];
+    Chunk<T> chunk;
+    const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, back to front
     int32_t chunk_pos[kChunkSplats];
     V chunk_grads[kChunkSplats][kSlots];
     const int32_t begin = static_cast<int32_t>(f.tile_ranges[tile * 2]);
     for (int32_t c = static_cast<int32_t>(used_end[tile]); c > begin; c -= kChunkSplats) {
-      RowInt row_bits{};
-      int count = 0;
+      chunk.size = 0;
       for (int32_t s = c - 1; s >= std::max(begin, c - kChunkSplats); --s) {
         prefetch_splat(splats.data(), f.sorted_ids.data(), s - kPrefetchAhead, begin, s);
-        const Splat<T>& sp = splats[f.sorted_ids[s]];
-        const IndexRange rows = reach_rows(sp, geo.x0, geo.y0);
+        chunk.add(splats[f.sorted_ids[s]]);
         std::fill_n(&isect[slot(tile, s)], kSlots, T(0));  // kept if it reaches no pixel
+      }
+      chunk.find_rows(geo.x0, geo.y0);
+      RowInt row_bits{};
+      int count = 0;
+      for (int j = 0; j < chunk.size; ++j) {
         // Written always, kept only if it reaches a row a pixel composited it in.
-        chunk[count] = sp;
+        const int32_t s = c - 1 - j;
+        kept[count] = &chunk.splat[j];
         chunk_pos[count] = s;
-        const RowInt reached = row_index >= rows.first && row_index < rows.end && s < max_last;
+        const RowInt reached = row_index >= chunk.first[j] && row_index < chunk.end[j] && s < max_last;
         row_bits |= reached ? int32_t(1u << count) : 0;
         count += any_lane(reached);
       }
@@ -443,7 +418,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         const RowMask l = last[y];
         for (; bits != 0; bits &= bits - 1) {
           const int k = std::countr_zero(bits);
-          const Splat<T>& sp = chunk[k];
+          const Splat<T>& sp = *kept[k];
           const PixelEval<V> e = eval_pixel(sp, px, py);
           // Where the forward pass blended this splat: in front of the pixel's last one.
           const RowMask live = (chunk_pos[k] < l) & (e.alpha >= T(io::kAlphaMin));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cpu/lanes.h"
 #include "splat/rasterizer.h"
 #include "shader_io.h"
 
@@ -63,24 +64,24 @@ Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
 // is convex): up to the top point where it lies in the strip, else up to where the nearer
 // strip edge cuts the ellipse, at w = (-b s + sqrt(cut - det s^2)) inv; likewise down to the
 // bottom point (-s_top, -half). Returns false where the strip misses the ellipse.
-template <typename T>
+template <typename V>
 struct EllipseAxis {
-  T half, s_top, cut, inv, b, det;
+  V half, s_top, cut, inv, b, det;
 };
 
-template <typename T>
-inline bool strip_extent(const EllipseAxis<T>& e, T s0, T s1, T& w_lo, T& w_hi) {
-  if (e.half < 0) return false;
+// V is T for one splat or a row of T for 16 splats at once; the result is true, or all ones,
+// where the strip meets the ellipse (w_lo and w_hi are meaningless elsewhere).
+template <typename V>
+inline auto strip_extent(const EllipseAxis<V>& e, const V& s0, const V& s1, V& w_lo, V& w_hi) {
   // Selects, not branches: they mispredict.
-  const T s_hi = std::clamp(e.s_top, s0, s1), s_lo = std::clamp(-e.s_top, s0, s1);
-  const bool top_in = s_hi == e.s_top, bottom_in = s_lo == -e.s_top;
-  const T disc_hi = e.cut - e.det * s_hi * s_hi, disc_lo = e.cut - e.det * s_lo * s_lo;
-  if (!((top_in || disc_hi >= 0) && (bottom_in || disc_lo >= 0))) return false;
-  const T cut_hi = (-e.b * s_hi + std::sqrt(std::max(disc_hi, T(0)))) * e.inv;
-  const T cut_lo = (-e.b * s_lo - std::sqrt(std::max(disc_lo, T(0)))) * e.inv;
+  const V s_hi = clamp_lanes(e.s_top, s0, s1), s_lo = clamp_lanes(-e.s_top, s0, s1);
+  const auto top_in = s_hi == e.s_top, bottom_in = s_lo == -e.s_top;
+  const V disc_hi = e.cut - e.det * s_hi * s_hi, disc_lo = e.cut - e.det * s_lo * s_lo;
+  const V cut_hi = (-e.b * s_hi + sqrt_lanes(disc_hi < 0 ? V{} : disc_hi)) * e.inv;
+  const V cut_lo = (-e.b * s_lo - sqrt_lanes(disc_lo < 0 ? V{} : disc_lo)) * e.inv;
   w_hi = top_in ? e.half : cut_hi;
   w_lo = bottom_in ? -e.half : cut_lo;
-  return true;
+  return e.half >= 0 && (top_in || disc_hi >= 0) && (bottom_in || disc_lo >= 0);
 }
 
 // The splat's ellipse along v (rows), from the packed fields.
@@ -89,24 +90,35 @@ inline EllipseAxis<T> row_axis(const Splat<T>& sp) {
   return {sp.half_v, sp.u_top, sp.cut_c, sp.inv_cc, sp.cb, sp.det};
 }
 
-// Integer pixel-centre indices i (centre origin + i + 0.5) inside [lo, hi], clamped to [0, n).
+// The tile rows [first, end) in which some pixel can reach alpha >= kAlphaMin, as whole
+// numbers in V (first >= end: none); the compositing loops evaluate those rows whole (16
+// pixels, one vector), which equals evaluating the tile. Row y (centre tile_y0 + y + 0.5) is
+// inside when my + v_lo <= centre <= my + v_hi.
+template <typename V>
+struct RowReach {
+  V first, end;
+};
+template <typename V, typename T>
+inline RowReach<V> reach_rows(const EllipseAxis<V>& axis, const V& mx, const V& my, T tile_x0, T tile_y0) {
+  const V u0 = (tile_x0 + T(0.5)) - mx;
+  V v_lo{}, v_hi{};
+  const auto hit = strip_extent(axis, u0, u0 + T(kTile - 1), v_lo, v_hi);
+  // Clamped before rounding, so that huge extents stay in range of any rounding method.
+  const V lo = clamp_lanes(my + v_lo - tile_y0 - T(0.5), T(-1), T(kTile + 1));
+  const V hi = clamp_lanes(my + v_hi - tile_y0 - T(0.5), T(-1), T(kTile + 1));
+  return {hit ? clamp_lanes(ceil_lanes(lo), T(0), T(kTile)) : V{},
+          hit ? clamp_lanes(floor_lanes(hi) + 1, T(0), T(kTile)) : V{}};
+}
+
+// The same for one packed splat, as indices.
 struct IndexRange {
   int first = 0, end = 0;
 };
 template <typename T>
-inline IndexRange centres_within(T lo, T hi, T origin, int n) {
-  return {static_cast<int>(std::clamp(std::ceil(lo - origin - T(0.5)), T(0), T(n))),
-          static_cast<int>(std::clamp(std::floor(hi - origin - T(0.5)) + 1, T(0), T(n)))};
-}
-
-// The tile rows [first, end) in which some pixel can reach alpha >= kAlphaMin; the compositing
-// loops evaluate those rows whole (16 pixels, one vector), which equals evaluating the tile.
-template <typename T>
 inline IndexRange reach_rows(const Splat<T>& sp, int tile_x0, int tile_y0) {
-  const T u0 = T(tile_x0) + T(0.5) - sp.mx;
-  T v_lo, v_hi;
-  if (!strip_extent(row_axis(sp), u0, u0 + T(kTile - 1), v_lo, v_hi)) return {};
-  return centres_within(sp.my + v_lo, sp.my + v_hi, T(tile_y0), kTile);
+  if (sp.half_v < 0) return {};
+  const RowReach<T> r = reach_rows(row_axis(sp), sp.mx, sp.my, T(tile_x0), T(tile_y0));
+  return {static_cast<int>(r.first), static_cast<int>(r.end)};
 }
 
 }  // namespace splat::cpu

@@ -1,0 +1,128 @@
+// Rows of a 16x16 tile as vector values (GCC vector extensions) and the few per-lane
+// operations GCC does not provide on them, with single AVX-512 instructions where available.
+// Every helper also takes plain scalars, so code written once serves one pixel or a row.
+#pragma once
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+#include "shader_io.h"
+
+namespace splat::cpu {
+
+inline constexpr int kRowLanes = static_cast<int>(io::kTileSize);
+
+// One tile row of 16 pixels as one vector value (GCC vector extension). The forward pass keeps
+// its rows' compositing state in registers while it walks the splats that reach them.
+template <typename T>
+struct RowOf;
+template <>
+struct RowOf<float> {
+  typedef float type __attribute__((vector_size(kRowLanes * sizeof(float))));
+  typedef int32_t mask __attribute__((vector_size(kRowLanes * sizeof(float))));
+};
+template <>
+struct RowOf<double> {
+  typedef double type __attribute__((vector_size(kRowLanes * sizeof(double))));
+  typedef int64_t mask __attribute__((vector_size(kRowLanes * sizeof(double))));
+};
+template <typename T>
+using Row = typename RowOf<T>::type;
+// Integer lanes as wide as T's: comparisons give all ones (true) or zero.
+template <typename T>
+using RowMaskOf = typename RowOf<T>::mask;
+using RowInt = RowMaskOf<float>;
+
+using RowUint = uint32_t __attribute__((vector_size(kRowLanes * sizeof(uint32_t))));
+
+// floor and p 2^n for float lanes, scalar or row; with AVX-512 one instruction each.
+inline float floor_lanes(float x) { return std::floor(x); }
+inline float scale_by_pow2(float p, float n) {  // n integral, 2^n normal
+  return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
+}
+#if defined(__AVX512F__)
+inline Row<float> floor_lanes(Row<float> x) {
+  return reinterpret_cast<Row<float>>(
+      _mm512_roundscale_ps(reinterpret_cast<__m512>(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+}
+inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
+  return reinterpret_cast<Row<float>>(_mm512_scalef_ps(reinterpret_cast<__m512>(p), reinterpret_cast<__m512>(n)));
+}
+#else
+inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the range below keeps it
+  const Row<float> cut = __builtin_convertvector(__builtin_convertvector(x, RowInt), Row<float>);
+  return cut > x ? cut - 1 : cut;
+}
+inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
+  return p * reinterpret_cast<Row<float>>((__builtin_convertvector(n, RowInt) + 127) << 23);
+}
+#endif
+
+inline double floor_lanes(double x) { return std::floor(x); }
+inline Row<double> floor_lanes(const Row<double>& x) {
+  Row<double> r;
+  for (int k = 0; k < kRowLanes; ++k) r[k] = std::floor(x[k]);
+  return r;
+}
+template <typename V>
+inline V ceil_lanes(const V& x) {
+  return -floor_lanes(-x);
+}
+
+inline float sqrt_lanes(float x) { return std::sqrt(x); }
+inline double sqrt_lanes(double x) { return std::sqrt(x); }
+#if defined(__AVX512F__)
+inline Row<float> sqrt_lanes(const Row<float>& x) {
+  return reinterpret_cast<Row<float>>(_mm512_sqrt_ps(reinterpret_cast<__m512>(x)));
+}
+#else
+inline Row<float> sqrt_lanes(const Row<float>& x) {
+  Row<float> r;
+  for (int k = 0; k < kRowLanes; ++k) r[k] = std::sqrt(x[k]);
+  return r;
+}
+#endif
+inline Row<double> sqrt_lanes(const Row<double>& x) {
+  Row<double> r;
+  for (int k = 0; k < kRowLanes; ++k) r[k] = std::sqrt(x[k]);
+  return r;
+}
+
+// std::clamp's result, lane by lane.
+template <typename V, typename B>
+inline V clamp_lanes(const V& v, B lo, B hi) {
+  return v < lo ? V{} + lo : (hi < v ? V{} + hi : v);
+}
+
+// Stores a row's first `count` lanes (a whole row in one vector store where it fits the image).
+template <typename Out, typename Lanes>
+inline void store_row(Out* out, const Lanes& row, int count) {
+  static_assert(sizeof(Lanes) == kRowLanes * sizeof(Out));
+  std::memcpy(out, &row, count == kRowLanes ? sizeof(Lanes) : static_cast<std::size_t>(count) * sizeof(Out));
+}
+
+template <typename M>
+inline bool any_lane(const M& mask) {
+  for (int x = 0; x < kRowLanes; ++x)
+    if (mask[x]) return true;
+  return false;
+}
+#if defined(__AVX512F__)
+// Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
+template <>
+inline bool any_lane(const RowMaskOf<float>& mask) {
+  static_assert(sizeof(mask) % sizeof(__m512i) == 0);
+  __m512i parts[sizeof(mask) / sizeof(__m512i)];
+  std::memcpy(parts, &mask, sizeof(mask));
+  __mmask16 any = 0;
+  for (const __m512i& part : parts) any |= _mm512_test_epi32_mask(part, part);
+  return any != 0;
+}
+#endif
+
+}  // namespace splat::cpu
