@@ -1,0 +1,164 @@
+// What the compositing passes (forward, backward, pose JVP) share: the packed splat table, the
+// per-pixel evaluation of a splat, a tile's geometry and a chunk of its splats.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "cpu/footprint.h"
+#include "cpu/lanes.h"
+#include "cpu/stages.h"
+#include "shader_io.h"
+
+namespace splat::cpu {
+
+// Gradient slots per intersection in the backward pass (the order of shader_io.h).
+enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
+static_assert(kSlots == io::kGradSlots && kOpacity == io::kSlotOpacity && kZ == io::kSlotDepth);
+
+// Every visible splat packed, indexed by Gaussian id (culled ones are never read). The table
+// lives in the calling thread's storage and is reused by its next call: at 1M Gaussians it is
+// 64 MB, which glibc would otherwise map, fault in and zero on every render. Each compositing
+// function packs at its start and is done with it on return (the pool's workers never call one),
+// so calls on one thread cannot overlap.
+template <typename T>
+const std::vector<Splat<T>>& pack_splats(const ForwardResultT<T>& f, ThreadPool& pool) {
+  thread_local std::vector<Splat<T>> storage;
+  std::vector<Splat<T>>& out = storage;  // the caller's: the name alone means each worker's own
+  const std::size_t n = f.gaussians.size();
+  if (out.size() < n) out.resize(n);
+  constexpr std::size_t kChunk = 4096;
+  pool.parallel_for((n + kChunk - 1) / kChunk, [&](std::size_t c) {
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      if (f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0) out[i] = pack_splat(f, i);
+    }
+  });
+  return out;
+}
+
+// Splats are read in depth order, scattered over memory: fetch a few intersections ahead,
+// within the tile's list [lo, hi). Always inlined: GCC 12 finds a separate function whose only
+// effect is a prefetch "const" and deletes every call to it.
+inline constexpr int64_t kPrefetchAhead = 8;
+template <typename T>
+[[gnu::always_inline]] inline void prefetch_splat(const Splat<T>* splats, const uint32_t* ids, int64_t s, int64_t lo,
+                           int64_t hi) {
+  if (s >= lo && s < hi) __builtin_prefetch(splats + ids[s]);
+}
+
+// Per-pixel evaluation shared by every pass: offset, Mahalanobis term and alpha. Loops over
+// plain pixel arrays are written as single float selects (no &&, no bool lanes): GCC 12
+// otherwise gives up vectorizing them.
+template <typename T>
+struct PixelEval {
+  T dx, dy, sigma, gauss;
+  T alpha;  // min(kAlphaMax, opacity * gauss), or 0 where sigma < 0 (never blended)
+  T raw_alpha;  // opacity * gauss before the cap
+};
+
+// exp(x) for x <= 0. Float: Cephes' range reduction and minimax polynomial (~2 ulp), written as
+// plain arithmetic so that it vectorizes (libm's expf does not without -ffast-math), for one
+// value or a row. Double: std::exp, for gradient checks.
+template <typename V>
+inline V exp_nonpositive_float(V x) {
+  x = x < -87.f ? -87.f : x;  // below this the result is under 2^-126 and would flush anyway
+  const V n = floor_lanes(x * 1.44269504088896341f + 0.5f);
+  const V r = x - n * 0.693359375f + n * 2.12194440e-4f;  // x - n ln2, in two parts
+  V p = r * 1.9875691500e-4f + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * r * r + r + 1.f;
+  return scale_by_pow2(p, n);
+}
+inline float exp_nonpositive(float x) { return exp_nonpositive_float(x); }
+inline Row<float> exp_nonpositive(Row<float> x) { return exp_nonpositive_float(x); }
+inline double exp_nonpositive(double x) { return std::exp(x); }
+inline Row<double> exp_nonpositive(const Row<double>& x) {
+  Row<double> e;
+  for (int k = 0; k < kTile; ++k) e[k] = std::exp(x[k]);
+  return e;
+}
+
+// V is T for one pixel or a row vector of T for a tile row; the row's py is one value.
+template <typename T, typename V>
+inline PixelEval<V> eval_pixel(const Splat<T>& s, const V& px, T py) {
+  PixelEval<V> e;
+  const T dy = s.my - py;
+  e.dx = s.mx - px;
+  e.dy = V{} + dy;
+  // sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2, as a quadratic in dx whose coefficients are
+  // per row: two fused multiply-adds per pixel.
+  e.sigma = e.dx * (T(0.5) * s.ca * e.dx + s.cb * dy) + T(0.5) * s.cc * dy * dy;
+  e.gauss = exp_nonpositive(-(e.sigma < 0 ? T(0) : e.sigma));
+  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
+  e.alpha = e.raw_alpha < T(io::kAlphaMax) ? e.raw_alpha : T(io::kAlphaMax);
+  return e;
+}
+
+// 1 where the forward pass blended sorted splat s into a pixel whose contributors end at
+// `last`, else 0 (a float select, so the pixel loops stay vectorized).
+template <typename T>
+inline T blended(int32_t s, int32_t last, const PixelEval<T>& e) {  // int32: half the lanes of int64
+  const T alpha_here = s < last ? e.alpha : T(0);
+  return alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
+}
+
+struct TileGeometry {
+  int x0, y0;          // first pixel of the tile
+  int width, height;   // pixels of the tile inside the image
+};
+
+inline TileGeometry tile_geometry(int tile, int tiles_x, int image_w, int image_h) {
+  const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+  return {x0, y0, std::min(kTile, image_w - x0), std::min(kTile, image_h - y0)};
+}
+
+// The compositing passes take a tile's splats in chunks of this many (bits of one word).
+inline constexpr int kChunkSplats = 32;
+
+// One chunk of a tile's splats: copies in tile-list order, and the rows each reaches, found
+// for 16 splats at a time (the reach has two square roots; one splat at a time it was a
+// quarter of the forward's compositing).
+template <typename T>
+struct Chunk {
+  static_assert(kChunkSplats % kRowLanes == 0);
+  alignas(64) Splat<T> splat[kChunkSplats];
+  // The fields reach_rows reads, one array per field, so that lanes load as rows.
+  alignas(64) T mx[kChunkSplats], my[kChunkSplats], half[kChunkSplats], s_top[kChunkSplats],
+      cut[kChunkSplats], inv[kChunkSplats], b[kChunkSplats], det[kChunkSplats];
+  int32_t first[kChunkSplats], end[kChunkSplats];  // the reached rows [first, end)
+  int size = 0;
+
+  void add(const Splat<T>& sp) {
+    splat[size] = sp;
+    mx[size] = sp.mx, my[size] = sp.my, half[size] = sp.half_v, s_top[size] = sp.u_top;
+    cut[size] = sp.cut_c, inv[size] = sp.inv_cc, b[size] = sp.cb, det[size] = sp.det;
+    ++size;
+  }
+
+  void find_rows(int tile_x0, int tile_y0) {
+    using V = Row<T>;
+    for (int j = size; j < kChunkSplats; ++j) {  // unused lanes reach nothing
+      mx[j] = my[j] = s_top[j] = cut[j] = inv[j] = b[j] = det[j] = 0;
+      half[j] = -1;
+    }
+    auto load = [](const T* p) {
+      V v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    };
+    for (int j = 0; j < size; j += kRowLanes) {
+      const EllipseAxis<V> axis{load(half + j), load(s_top + j), load(cut + j), load(inv + j), load(b + j), load(det + j)};
+      const RowReach<V> rows = reach_rows(axis, load(mx + j), load(my + j), T(tile_x0), T(tile_y0));
+      const RowInt row_first = __builtin_convertvector(rows.first, RowInt), row_end = __builtin_convertvector(rows.end, RowInt);
+      std::memcpy(first + j, &row_first, sizeof row_first);
+      std::memcpy(end + j, &row_end, sizeof row_end);
+    }
+  }
+};
+
+}  // namespace splat::cpu

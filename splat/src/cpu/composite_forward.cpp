@@ -1,0 +1,150 @@
+// Front-to-back alpha compositing per 16x16 tile: each tile row's state stays in registers
+// while it walks the splats that reach it.
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <limits>
+
+#include "cpu/composite_common.h"
+
+namespace splat::cpu {
+
+// The forward pass copies out a chunk's splats that reach the tile, with a bit per row saying
+// which rows each one reaches; then each block of rows walks its bits. Two rows per block give
+// the out-of-order core two independent dependency chains (transmittance runs from splat to
+// splat), for the price of evaluating a splat on a row it may miss: 2% faster than one row,
+// 20% faster than four (100K donut, 2 cores).
+inline constexpr int kBlockRows = 2;
+inline constexpr int kBlocks = kTile / kBlockRows;
+
+template <typename T>
+void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
+  using V = Row<T>;
+  using RowMask = RowMaskOf<T>;
+  const int w = f.camera.width, h = f.camera.height;
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  f.width = w;
+  f.height = h;
+  f.rgb.assign(pixels * 3, 0);
+  f.alpha.assign(pixels, 0);
+  f.depth.assign(pixels, 0);
+  f.depth_normalized.assign(pixels, 0);
+  f.last_contributor.assign(pixels, 0);
+  f.final_transmittance.assign(pixels, 1);
+  const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
+                   T(f.settings.background[2])};
+  const std::vector<Splat<T>>& splats = pack_splats(f, pool);
+  V lane{};
+  RowInt row_index{};
+  for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
+
+  pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
+    const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
+    V trans[kTile], acc_r[kTile], acc_g[kTile], acc_b[kTile], acc_z[kTile];
+    RowMask row_done[kTile];
+    RowMask last[kTile];  // integer lanes as wide as T's
+    int block_live[kBlocks] = {};  // pixels of each block still compositing
+    for (int y = 0; y < kTile; ++y) {
+      trans[y] = V{} + 1;
+      acc_r[y] = acc_g[y] = acc_b[y] = acc_z[y] = V{};
+      last[y] = RowMask{};
+      // Pixels past the image edge start finished so they never hold the tile open.
+      row_done[y] = (lane >= T(geo.width)) | (RowMask{} - (y >= geo.height));
+      block_live[y / kBlockRows] += y < geo.height ? geo.width : 0;
+    }
+    int remaining = geo.width * geo.height;
+    const V px = lane + (T(geo.x0) + T(0.5));
+    Chunk<T> chunk;
+    const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, in order
+    int32_t chunk_next_last[kChunkSplats];
+    const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
+    for (uint32_t c = begin; c < end && remaining > 0; c += kChunkSplats) {
+      chunk.size = 0;
+      for (uint32_t s = c; s < std::min(end, c + kChunkSplats); ++s) {
+        prefetch_splat(splats.data(), f.sorted_ids.data(), int64_t(s) + kPrefetchAhead, begin, end);
+        chunk.add(splats[f.sorted_ids[s]]);
+      }
+      chunk.find_rows(geo.x0, geo.y0);
+      RowInt row_bits{};  // bit k of row y: kept splat k reaches row y
+      int count = 0;
+      for (int j = 0; j < chunk.size; ++j) {
+        // Written always, kept only if it reaches a row: whether it does is a coin toss (about
+        // half of all intersections reach none), and a branch on it would mispredict.
+        kept[count] = &chunk.splat[j];
+        chunk_next_last[count] = static_cast<int32_t>(c + j + 1);
+        row_bits |= (row_index >= chunk.first[j] && row_index < chunk.end[j]) ? int32_t(1u << count) : 0;
+        count += chunk.first[j] < chunk.end[j];
+      }
+      for (int j = 0; j < kBlocks; ++j) {
+        const int y0 = j * kBlockRows;
+        uint32_t bits = 0;
+        for (int q = 0; q < kBlockRows; ++q) bits |= static_cast<uint32_t>(row_bits[y0 + q]);
+        if (block_live[j] == 0 || bits == 0) continue;
+        V t[kBlockRows], r[kBlockRows], g[kBlockRows], b[kBlockRows], z[kBlockRows];
+        T py[kBlockRows];
+        RowMask done[kBlockRows], l[kBlockRows];
+        for (int q = 0; q < kBlockRows; ++q) {
+          t[q] = trans[y0 + q], r[q] = acc_r[y0 + q], g[q] = acc_g[y0 + q], b[q] = acc_b[y0 + q];
+          z[q] = acc_z[y0 + q], done[q] = row_done[y0 + q], l[q] = last[y0 + q];
+          py[q] = T(geo.y0 + y0 + q) + T(0.5);
+        }
+        for (; bits != 0; bits &= bits - 1) {
+          const int k = std::countr_zero(bits);
+          const Splat<T>& sp = *kept[k];
+          RowMask stopped{};
+#pragma GCC unroll 4
+          for (int q = 0; q < kBlockRows; ++q) {
+            const PixelEval<V> e = eval_pixel(sp, px, py[q]);
+            const V next_t = t[q] * (1 - e.alpha);
+            // Lanes where the splat blends into a still-compositing pixel: the pixel keeps
+            // compositing or, where transmittance falls to the cut-off, stops without it.
+            const RowMask blends = (e.alpha >= T(io::kAlphaMin)) & ~done[q];
+            const RowMask keep = blends & (next_t > T(io::kTransmittanceMin));
+            const RowMask stop = blends & ~keep;
+            const V weight = keep ? e.alpha * t[q] : T(0);
+            r[q] += weight * sp.r;
+            g[q] += weight * sp.g;
+            b[q] += weight * sp.b;
+            z[q] += weight * sp.z;
+            t[q] = keep ? next_t : t[q];
+            l[q] = keep ? chunk_next_last[k] : l[q];
+            done[q] |= stop;
+            stopped |= stop;
+          }
+          if (!any_lane(stopped)) continue;  // pixels finish rarely: count only when one did
+          int live_now = 0;
+          for (int q = 0; q < kBlockRows; ++q)
+            for (int x = 0; x < kTile; ++x) live_now += done[q][x] == 0;
+          remaining -= block_live[j] - live_now;
+          block_live[j] = live_now;
+          if (live_now == 0) break;
+        }
+        for (int q = 0; q < kBlockRows; ++q) {
+          trans[y0 + q] = t[q], acc_r[y0 + q] = r[q], acc_g[y0 + q] = g[q], acc_b[y0 + q] = b[q];
+          acc_z[y0 + q] = z[q], row_done[y0 + q] = done[q], last[y0 + q] = l[q];
+        }
+      }
+    }
+    for (int y = 0; y < geo.height; ++y) {
+      const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + geo.x0;
+      const V alpha = 1 - trans[y];
+      const V red = acc_r[y] + trans[y] * bg[0], green = acc_g[y] + trans[y] * bg[1],
+              blue = acc_b[y] + trans[y] * bg[2];
+      store_row(&f.alpha[o], alpha, geo.width);
+      store_row(&f.depth[o], acc_z[y], geo.width);
+      store_row(&f.depth_normalized[o], alpha > 0 ? acc_z[y] / alpha : T(0), geo.width);
+      store_row(&f.final_transmittance[o], trans[y], geo.width);
+      store_row(&f.last_contributor[o], __builtin_convertvector(last[y], RowUint), geo.width);
+      for (int x = 0; x < geo.width; ++x) {
+        f.rgb[(o + x) * 3] = red[x];
+        f.rgb[(o + x) * 3 + 1] = green[x];
+        f.rgb[(o + x) * 3 + 2] = blue[x];
+      }
+    }
+  });
+}
+
+template void composite_forward(ForwardResultT<float>&, ThreadPool&);
+template void composite_forward(ForwardResultT<double>&, ThreadPool&);
+
+}  // namespace splat::cpu
