@@ -116,12 +116,8 @@ inline bool any_lane(const M& mask) {
 // Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
 template <>
 inline bool any_lane(const RowMaskOf<float>& mask) {
-  static_assert(sizeof(mask) % sizeof(__m512i) == 0);
-  __m512i parts[sizeof(mask) / sizeof(__m512i)];
-  std::memcpy(parts, &mask, sizeof(mask));
-  __mmask16 any = 0;
-  for (const __m512i& part : parts) any |= _mm512_test_epi32_mask(part, part);
-  return any != 0;
+  const __m512i lanes = reinterpret_cast<__m512i>(mask);
+  return _mm512_test_epi32_mask(lanes, lanes) != 0;
 }
 #endif
 
