@@ -1,7 +1,6 @@
 // A splat's footprint on screen: the packed parameters the compositing loops read, and the rows
 // of a tile where its alpha can reach kAlphaMin.
 #pragma once
-#include <algorithm>
 #include <cmath>
 
 #include "cpu/lanes.h"
@@ -63,7 +62,7 @@ Splat<T> pack_splat(const ForwardResultT<T>& f, std::size_t id) {
 // The w-range of the ellipse inside the strip s0 <= s <= s1 is one interval (the intersection
 // is convex): up to the top point where it lies in the strip, else up to where the nearer
 // strip edge cuts the ellipse, at w = (-b s + sqrt(cut - det s^2)) inv; likewise down to the
-// bottom point (-s_top, -half). Returns false where the strip misses the ellipse.
+// bottom point (-s_top, -half).
 template <typename V>
 struct EllipseAxis {
   V half, s_top, cut, inv, b, det;
@@ -116,7 +115,7 @@ struct IndexRange {
 };
 template <typename T>
 inline IndexRange reach_rows(const Splat<T>& sp, int tile_x0, int tile_y0) {
-  if (sp.half_v < 0) return {};
+  if (sp.half_v < 0) return {};  // reaches nothing: spares the square roots
   const RowReach<T> r = reach_rows(row_axis(sp), sp.mx, sp.my, T(tile_x0), T(tile_y0));
   return {static_cast<int>(r.first), static_cast<int>(r.end)};
 }
