@@ -58,20 +58,21 @@ struct PixelEval {
   T raw_alpha;  // opacity * gauss before the cap
 };
 
-// exp(x) for x <= 0. Float: Cephes' range reduction and minimax polynomial (~2 ulp), written as
-// plain arithmetic so that it vectorizes (libm's expf does not without -ffast-math), for one
-// value or a row. Double: std::exp, for gradient checks.
+// exp(x) for x <= 0 (a little above 0 is fine too). Float: 2^n e^r with n = round(x / ln 2)
+// and r = x - n ln 2 (Cephes' two-part ln 2, so r is exact), e^r by a degree-5 polynomial
+// (minimax relative error 9e-8 on |r| <= ln(2) / 2, fitted by Lawson's iteration; about 2 ulp
+// with rounding). Written as plain arithmetic so that it vectorizes (libm's expf does not
+// without -ffast-math), for one value or a row. Double: std::exp, for gradient checks.
 template <typename V>
 inline V exp_nonpositive_float(V x) {
-  x = x < -87.f ? -87.f : x;  // below this the result is under 2^-126 and would flush anyway
-  const V n = floor_lanes(x * 1.44269504088896341f + 0.5f);
-  const V r = x - n * 0.693359375f + n * 2.12194440e-4f;  // x - n ln2, in two parts
-  V p = r * 1.9875691500e-4f + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
-  p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
-  p = p * r + 5.0000001201e-1f;
-  p = p * r * r + r + 1.f;
+  x = max_lanes(x, -87.f);  // below, the result is under 2^-126 and would flush anyway
+  const V n = round_lanes(x * 1.44269504088896341f);
+  const V r = x - n * 0.693359375f + n * 2.12194440e-4f;
+  V p = r * 8.290324360e-3f + 4.189795256e-2f;
+  p = p * r + 1.666763574e-1f;
+  p = p * r + 4.999915063e-1f;
+  p = p * r + 9.999997020e-1f;
+  p = p * r + 1.f;
   return scale_by_pow2(p, n);
 }
 inline float exp_nonpositive(float x) { return exp_nonpositive_float(x); }
@@ -83,6 +84,39 @@ inline Row<double> exp_nonpositive(const Row<double>& x) {
   return e;
 }
 
+// sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2, as a quadratic in dx: dx (a/2 dx + b dy) + c/2 dy^2.
+// The terms in dx alone are per column and those in dy alone per row, so a pass that evaluates
+// one splat on many rows computes them once for all rows (SigmaTerms), leaving two operations
+// per pixel. Every pass computes sigma through these, in this order, so all agree to the bit.
+template <typename T, typename V>
+inline V half_a_dx(const Splat<T>& s, const V& dx) { return T(0.5) * s.ca * dx; }
+template <typename T, typename V>
+inline V b_dy(const Splat<T>& s, const V& dy) { return s.cb * dy; }
+template <typename T, typename V>
+inline V half_c_dy2(const Splat<T>& s, const V& dy) { return T(0.5) * s.cc * dy * dy; }
+template <typename V, typename W>
+inline V sigma_from(const V& dx, const V& a_dx, const W& b_dy, const W& c_dy2) { return dx * (a_dx + b_dy) + c_dy2; }
+
+// One splat's sigma terms over a tile: dx per column, the dy terms per row.
+template <typename T>
+struct SigmaTerms {
+  Row<T> dx, a_dx, b_dy, c_dy2;
+  SigmaTerms() = default;
+  SigmaTerms(const Splat<T>& s, const Row<T>& px, const Row<T>& py)
+      : dx(s.mx - px), a_dx(half_a_dx(s, dx)), b_dy(cpu::b_dy(s, s.my - py)), c_dy2(half_c_dy2(s, s.my - py)) {}
+  Row<T> sigma(int row) const { return sigma_from(dx, a_dx, b_dy[row], c_dy2[row]); }
+};
+
+// gauss, alpha and the uncapped alpha from sigma.
+template <typename T, typename V>
+inline void eval_alpha(const Splat<T>& s, PixelEval<V>& e) {
+  // Where rounding makes sigma negative (at the mean) gauss is a little over 1, but such
+  // pixels are never blended (gsplat skips sigma < 0).
+  e.gauss = exp_nonpositive(-e.sigma);
+  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
+  e.alpha = e.raw_alpha < T(io::kAlphaMax) ? e.raw_alpha : T(io::kAlphaMax);
+}
+
 // V is T for one pixel or a row vector of T for a tile row; the row's py is one value.
 template <typename T, typename V>
 inline PixelEval<V> eval_pixel(const Splat<T>& s, const V& px, T py) {
@@ -90,12 +124,8 @@ inline PixelEval<V> eval_pixel(const Splat<T>& s, const V& px, T py) {
   const T dy = s.my - py;
   e.dx = s.mx - px;
   e.dy = V{} + dy;
-  // sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2, as a quadratic in dx whose coefficients are
-  // per row: two fused multiply-adds per pixel.
-  e.sigma = e.dx * (T(0.5) * s.ca * e.dx + s.cb * dy) + T(0.5) * s.cc * dy * dy;
-  e.gauss = exp_nonpositive(-(e.sigma < 0 ? T(0) : e.sigma));
-  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
-  e.alpha = e.raw_alpha < T(io::kAlphaMax) ? e.raw_alpha : T(io::kAlphaMax);
+  e.sigma = sigma_from(e.dx, half_a_dx(s, e.dx), b_dy(s, dy), half_c_dy2(s, dy));
+  eval_alpha(s, e);
   return e;
 }
 

@@ -37,6 +37,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   V lane{};
   RowInt row_index{};
   for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
+  const V centre = lane + T(0.5);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -53,10 +54,11 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       block_live[y / kBlockRows] += y < geo.height ? geo.width : 0;
     }
     int remaining = geo.width * geo.height;
-    const V px = lane + (T(geo.x0) + T(0.5));
+    const V px = centre + T(geo.x0), py = centre + T(geo.y0);
     Chunk<T> chunk;
     const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, in order
     int32_t chunk_next_last[kChunkSplats];
+    SigmaTerms<T> terms[kChunkSplats];  // of the kept splats
     const uint32_t begin = f.tile_ranges[tile * 2], end = f.tile_ranges[tile * 2 + 1];
     for (uint32_t c = begin; c < end && remaining > 0; c += kChunkSplats) {
       chunk.size = 0;
@@ -75,18 +77,17 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         row_bits |= (row_index >= chunk.first[j] && row_index < chunk.end[j]) ? int32_t(1u << count) : 0;
         count += chunk.first[j] < chunk.end[j];
       }
+      for (int k = 0; k < count; ++k) terms[k] = SigmaTerms<T>(*kept[k], px, py);
       for (int j = 0; j < kBlocks; ++j) {
         const int y0 = j * kBlockRows;
         uint32_t bits = 0;
         for (int q = 0; q < kBlockRows; ++q) bits |= static_cast<uint32_t>(row_bits[y0 + q]);
         if (block_live[j] == 0 || bits == 0) continue;
         V t[kBlockRows], r[kBlockRows], g[kBlockRows], b[kBlockRows], z[kBlockRows];
-        T py[kBlockRows];
         RowMask done[kBlockRows], l[kBlockRows];
         for (int q = 0; q < kBlockRows; ++q) {
           t[q] = trans[y0 + q], r[q] = acc_r[y0 + q], g[q] = acc_g[y0 + q], b[q] = acc_b[y0 + q];
           z[q] = acc_z[y0 + q], done[q] = row_done[y0 + q], l[q] = last[y0 + q];
-          py[q] = T(geo.y0 + y0 + q) + T(0.5);
         }
         for (; bits != 0; bits &= bits - 1) {
           const int k = std::countr_zero(bits);
@@ -94,7 +95,9 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
           RowMask stopped{};
 #pragma GCC unroll 4
           for (int q = 0; q < kBlockRows; ++q) {
-            const PixelEval<V> e = eval_pixel(sp, px, py[q]);
+            PixelEval<V> e;
+            e.sigma = terms[k].sigma(y0 + q);
+            eval_alpha(sp, e);
             const V next_t = t[q] * (1 - e.alpha);
             // Lanes where the splat blends into a still-compositing pixel: the pixel keeps
             // compositing or, where transmittance falls to the cut-off, stops without it.

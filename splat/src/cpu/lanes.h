@@ -40,18 +40,31 @@ using RowInt = RowMaskOf<float>;
 
 using RowUint = uint32_t __attribute__((vector_size(kRowLanes * sizeof(uint32_t))));
 
-// floor and p 2^n for float lanes, scalar or row; with AVX-512 one instruction each.
+// floor, round to nearest, max and p 2^n for float lanes, scalar or row; with AVX-512 one
+// instruction each.
 inline float floor_lanes(float x) { return std::floor(x); }
+inline float round_lanes(float x) { return std::nearbyint(x); }
+inline float max_lanes(float x, float lo) { return x < lo ? lo : x; }
 inline float scale_by_pow2(float p, float n) {  // n integral, 2^n normal
   return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
 }
 #if defined(__AVX512F__)
+// The masked forms with every lane set: the same instructions, but GCC 12 warns that the
+// unmasked ones read an undefined source (its bug 105593) once their inputs are constants.
+inline constexpr __mmask16 kAllLanes = 0xFFFF;
 inline Row<float> floor_lanes(Row<float> x) {
   return reinterpret_cast<Row<float>>(
-      _mm512_roundscale_ps(reinterpret_cast<__m512>(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+      _mm512_mask_roundscale_ps(reinterpret_cast<__m512>(x), kAllLanes, reinterpret_cast<__m512>(x), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
 }
 inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
-  return reinterpret_cast<Row<float>>(_mm512_scalef_ps(reinterpret_cast<__m512>(p), reinterpret_cast<__m512>(n)));
+  return reinterpret_cast<Row<float>>(_mm512_mask_scalef_ps(reinterpret_cast<__m512>(p), kAllLanes, reinterpret_cast<__m512>(p), reinterpret_cast<__m512>(n)));
+}
+inline Row<float> round_lanes(Row<float> x) {
+  return reinterpret_cast<Row<float>>(
+      _mm512_mask_roundscale_ps(reinterpret_cast<__m512>(x), kAllLanes, reinterpret_cast<__m512>(x), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+}
+inline Row<float> max_lanes(Row<float> x, float lo) {  // the compare-and-select below is two
+  return reinterpret_cast<Row<float>>(_mm512_mask_max_ps(reinterpret_cast<__m512>(x), kAllLanes, reinterpret_cast<__m512>(x), _mm512_set1_ps(lo)));
 }
 #else
 inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the range below keeps it
@@ -61,6 +74,8 @@ inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the r
 inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
   return p * reinterpret_cast<Row<float>>((__builtin_convertvector(n, RowInt) + 127) << 23);
 }
+inline Row<float> round_lanes(Row<float> x) { return floor_lanes(x + 0.5f); }  // ties may go either way
+inline Row<float> max_lanes(Row<float> x, float lo) { return x < lo ? lo : x; }
 #endif
 
 inline double floor_lanes(double x) { return std::floor(x); }
