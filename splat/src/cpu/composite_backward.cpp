@@ -9,6 +9,21 @@
 
 namespace splat::cpu {
 
+// During the row walk the slots of the mean and conic hold moments of v_sigma: sums of
+// v_sigma times dx, dy, dx^2, dx dy and dy^2, where (dx, dy) is the mean minus the pixel.
+enum MomentSlot { kMomentX = kMx, kMomentY = kMy, kMomentXX = kCa, kMomentXY = kCb, kMomentYY = kCc };
+
+// The moments to dL/d(mean) and dL/d(conic), from sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2.
+template <typename T>
+void moments_to_gradients(const Splat<T>& sp, T* g) {
+  const T x = g[kMomentX], y = g[kMomentY], xx = g[kMomentXX], xy = g[kMomentXY], yy = g[kMomentYY];
+  g[kMx] = sp.ca * x + sp.cb * y;
+  g[kMy] = sp.cc * y + sp.cb * x;
+  g[kCa] = T(0.5) * xx;
+  g[kCb] = xy;
+  g[kCc] = T(0.5) * yy;
+}
+
 template <typename T>
 ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<T>& d_image,
                                   ThreadPool& pool, std::vector<T>& scratch) {
@@ -47,6 +62,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   V lane{};
   RowInt row_index{};
   for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
+  const V centre = lane + T(0.5);
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -78,12 +94,13 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
     RowInt max_last{};
     for (int y = 0; y < kTile; ++y) max_last[y] = row_max_last[y];
-    const V px = lane + (T(geo.x0) + T(0.5));
+    const V px = centre + T(geo.x0), py = centre + T(geo.y0);
     // Back to front in chunks, as the forward pass goes front to back: chunk splat k (the k-th
     // from the back) reaches the rows of bit k, and its gradients add up per lane over the rows.
     Chunk<T> chunk;
     const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, back to front
     int32_t chunk_pos[kChunkSplats];
+    SigmaTerms<T> terms[kChunkSplats];
     V chunk_grads[kChunkSplats][kSlots];
     const int32_t begin = static_cast<int32_t>(f.tile_ranges[tile * 2]);
     for (int32_t c = static_cast<int32_t>(used_end[tile]); c > begin; c -= kChunkSplats) {
@@ -105,19 +122,22 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         row_bits |= reached ? int32_t(1u << count) : 0;
         count += any_lane(reached);
       }
-      for (int k = 0; k < count; ++k)
+      for (int k = 0; k < count; ++k) {
+        terms[k] = SigmaTerms<T>(*kept[k], px, py);
         for (int slot_k = 0; slot_k < kSlots; ++slot_k) chunk_grads[k][slot_k] = V{};
+      }
       for (int y = 0; y < kTile; ++y) {
         uint32_t bits = static_cast<uint32_t>(row_bits[y]);
         if (bits == 0) continue;
-        const T py = T(geo.y0 + y) + T(0.5);
         V t_row = trans[y], br = behind_r[y], bgr = behind_g[y], bb = behind_b[y], bz = behind_z[y];
         const V vr = v_r[y], vg = v_g[y], vb = v_b[y], vz = v_z[y], vf = v_final[y];
         const RowMask l = last[y];
         for (; bits != 0; bits &= bits - 1) {
           const int k = std::countr_zero(bits);
           const Splat<T>& sp = *kept[k];
-          const PixelEval<V> e = eval_pixel(sp, px, py);
+          PixelEval<V> e;
+          e.sigma = terms[k].sigma(y);
+          eval_alpha(sp, e);
           // Where the forward pass blended this splat: in front of the pixel's last one.
           const RowMask live = (chunk_pos[k] < l) & (e.alpha >= T(io::kAlphaMin));
           const V inv = live ? T(1) / (1 - e.alpha) : T(0);
@@ -140,11 +160,16 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           const RowMask smooth = live & (e.raw_alpha < T(io::kAlphaMax));
           const V v_sigma = smooth ? -sp.opacity * e.gauss * v_alpha : T(0);
           grads[kOpacity] += smooth ? e.gauss * v_alpha : T(0);
-          grads[kCa] += T(0.5) * e.dx * e.dx * v_sigma;
-          grads[kCc] += T(0.5) * e.dy * e.dy * v_sigma;
-          grads[kCb] += e.dx * e.dy * v_sigma;
-          grads[kMx] += (sp.ca * e.dx + sp.cb * e.dy) * v_sigma;
-          grads[kMy] += (sp.cc * e.dy + sp.cb * e.dx) * v_sigma;
+          // The conic and mean gradients are sums of v_sigma times dx^2 / 2, dx dy, dy^2 / 2,
+          // a dx + b dy and c dy + b dx; dy is one value per row, so the lanes gather the
+          // moments of dx and dy and the conic combines them once per chunk (below).
+          const T dy = sp.my - py[y];  // mean minus pixel, as terms' dx
+          const V dx_v = terms[k].dx * v_sigma;
+          grads[kMomentX] += dx_v;
+          grads[kMomentXX] += terms[k].dx * dx_v;
+          grads[kMomentXY] += dy * dx_v;
+          grads[kMomentY] += dy * v_sigma;
+          grads[kMomentYY] += (dy * dy) * v_sigma;
         }
         trans[y] = t_row, behind_r[y] = br, behind_g[y] = bgr, behind_b[y] = bb, behind_z[y] = bz;
       }
@@ -155,6 +180,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           for (int x = 0; x < kTile; ++x) sum += chunk_grads[k][slot_k][x];
           out[slot_k] = sum;
         }
+        moments_to_gradients(*kept[k], out);
       }
     }
   });
