@@ -9,7 +9,10 @@
 
 namespace splat::cpu {
 
-template <typename T>
+// kViewDependent: whether colours change with the viewpoint (SH degree > 0). Where they do not,
+// their tangents are zero and the pixel loop skips 18 of its 42 multiply-adds per direction
+// pair.
+template <bool kViewDependent, typename T>
 void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen_jvp, ThreadPool& pool,
                         std::vector<T>& out) {
   const int w = f.width, h = f.height;
@@ -80,9 +83,14 @@ void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen
             const T d_sigma = (quad[k] * e.dx + lin[k]) * e.dx + con[k];
             const T d_alpha = -smooth * e.raw_alpha * d_sigma;
             const T d_weight = live * trans[p] * (d_alpha + e.alpha * d_log_t[k][p]);
-            d_rgb[0][k][p] += d_weight * sp.r + weight * jac[6 * 6 + k];
-            d_rgb[1][k][p] += d_weight * sp.g + weight * jac[7 * 6 + k];
-            d_rgb[2][k][p] += d_weight * sp.b + weight * jac[8 * 6 + k];
+            d_rgb[0][k][p] += d_weight * sp.r;
+            d_rgb[1][k][p] += d_weight * sp.g;
+            d_rgb[2][k][p] += d_weight * sp.b;
+            if constexpr (kViewDependent) {
+              d_rgb[0][k][p] += weight * jac[6 * 6 + k];
+              d_rgb[1][k][p] += weight * jac[7 * 6 + k];
+              d_rgb[2][k][p] += weight * jac[8 * 6 + k];
+            }
             d_z[k][p] += d_weight * sp.z + weight * jac[5 * 6 + k];
             d_log_t[k][p] -= d_alpha * inv;
           }
@@ -104,6 +112,16 @@ void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen
       }
     }
   });
+}
+
+template <typename T>
+void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen_jvp, ThreadPool& pool,
+                        std::vector<T>& out) {
+  if (f.gaussians.sh_degree > 0) {
+    composite_pose_jvp<true>(f, screen_jvp, pool, out);
+  } else {
+    composite_pose_jvp<false>(f, screen_jvp, pool, out);
+  }
 }
 
 template void composite_pose_jvp(const ForwardResultT<float>&, const std::vector<float>&, ThreadPool&,
