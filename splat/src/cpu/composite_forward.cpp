@@ -21,6 +21,8 @@ template <typename T>
 void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   using V = Row<T>;
   using RowMask = RowMaskOf<T>;
+  using Mask = LaneMask<T>;
+  using M = typename Mask::M;
   const int w = f.camera.width, h = f.camera.height;
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   f.width = w;
@@ -42,7 +44,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
     V trans[kTile], acc_r[kTile], acc_g[kTile], acc_b[kTile], acc_z[kTile];
-    RowMask row_done[kTile];
+    M row_done[kTile];
     RowMask last[kTile];  // integer lanes as wide as T's
     int block_live[kBlocks] = {};  // pixels of each block still compositing
     for (int y = 0; y < kTile; ++y) {
@@ -50,7 +52,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       acc_r[y] = acc_g[y] = acc_b[y] = acc_z[y] = V{};
       last[y] = RowMask{};
       // Pixels past the image edge start finished so they never hold the tile open.
-      row_done[y] = (lane >= T(geo.width)) | (RowMask{} - (y >= geo.height));
+      row_done[y] = Mask::from_vector((lane >= T(geo.width)) | (RowMask{} - (y >= geo.height)));
       block_live[y / kBlockRows] += y < geo.height ? geo.width : 0;
     }
     int remaining = geo.width * geo.height;
@@ -84,7 +86,8 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         for (int q = 0; q < kBlockRows; ++q) bits |= static_cast<uint32_t>(row_bits[y0 + q]);
         if (block_live[j] == 0 || bits == 0) continue;
         V t[kBlockRows], r[kBlockRows], g[kBlockRows], b[kBlockRows], z[kBlockRows];
-        RowMask done[kBlockRows], l[kBlockRows];
+        M done[kBlockRows];
+        RowMask l[kBlockRows];
         for (int q = 0; q < kBlockRows; ++q) {
           t[q] = trans[y0 + q], r[q] = acc_r[y0 + q], g[q] = acc_g[y0 + q], b[q] = acc_b[y0 + q];
           z[q] = acc_z[y0 + q], done[q] = row_done[y0 + q], l[q] = last[y0 + q];
@@ -92,7 +95,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         for (; bits != 0; bits &= bits - 1) {
           const int k = std::countr_zero(bits);
           const Splat<T>& sp = *kept[k];
-          RowMask stopped{};
+          M stopped = Mask::none();
 #pragma GCC unroll 4
           for (int q = 0; q < kBlockRows; ++q) {
             PixelEval<V> e;
@@ -101,23 +104,22 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
             const V next_t = t[q] * (1 - e.alpha);
             // Lanes where the splat blends into a still-compositing pixel: the pixel keeps
             // compositing or, where transmittance falls to the cut-off, stops without it.
-            const RowMask blends = (e.alpha >= T(io::kAlphaMin)) & ~done[q];
-            const RowMask keep = blends & (next_t > T(io::kTransmittanceMin));
-            const RowMask stop = blends & ~keep;
-            const V weight = keep ? e.alpha * t[q] : T(0);
+            const M blends = Mask::ge(e.alpha, T(io::kAlphaMin), Mask::and_not(Mask::all(), done[q]));
+            const M keep = Mask::gt(next_t, T(io::kTransmittanceMin), blends);
+            const M stop = Mask::and_not(blends, keep);
+            const V weight = Mask::select(keep, e.alpha * t[q], V{});
             r[q] += weight * sp.r;
             g[q] += weight * sp.g;
             b[q] += weight * sp.b;
             z[q] += weight * sp.z;
-            t[q] = keep ? next_t : t[q];
-            l[q] = keep ? chunk_next_last[k] : l[q];
+            t[q] = Mask::select(keep, next_t, t[q]);
+            l[q] = Mask::select(keep, chunk_next_last[k], l[q]);
             done[q] |= stop;
             stopped |= stop;
           }
-          if (!any_lane(stopped)) continue;  // pixels finish rarely: count only when one did
+          if (!Mask::any(stopped)) continue;  // pixels finish rarely: count only when one did
           int live_now = 0;
-          for (int q = 0; q < kBlockRows; ++q)
-            for (int x = 0; x < kTile; ++x) live_now += done[q][x] == 0;
+          for (int q = 0; q < kBlockRows; ++q) live_now += kTile - Mask::count(done[q]);
           remaining -= block_live[j] - live_now;
           block_live[j] = live_now;
           if (live_now == 0) break;
