@@ -58,6 +58,8 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
   using V = Row<T>;
   using RowMask = RowMaskOf<T>;
+  using Mask = LaneMask<T>;
+  using M = typename Mask::M;
 
   V lane{};
   RowInt row_index{};
@@ -139,10 +141,10 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           e.sigma = terms[k].sigma(y);
           eval_alpha(sp, e);
           // Where the forward pass blended this splat: in front of the pixel's last one.
-          const RowMask live = (chunk_pos[k] < l) & (e.alpha >= T(io::kAlphaMin));
-          const V inv = live ? T(1) / (1 - e.alpha) : T(0);
-          const V t = live ? t_row * inv : t_row;  // transmittance in front of it
-          const V weight = live ? e.alpha * t : T(0);
+          const M live = Mask::ge(e.alpha, T(io::kAlphaMin), Mask::int_less(chunk_pos[k], l));
+          const V inv = Mask::select(live, T(1) / (1 - e.alpha), V{});
+          const V t = Mask::select(live, t_row * inv, t_row);  // transmittance in front of it
+          const V weight = Mask::select(live, e.alpha * t, V{});
           // dL/dalpha: own contribution minus what it hides behind, plus the T_final terms.
           const V v_alpha = (sp.r * t - br * inv) * vr + (sp.g * t - bgr * inv) * vg +
                             (sp.b * t - bb * inv) * vb + (sp.z * t - bz * inv) * vz + vf * inv;
@@ -157,9 +159,9 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           bz += weight * sp.z;
           t_row = t;
           // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
-          const RowMask smooth = live & (e.raw_alpha < T(io::kAlphaMax));
-          const V v_sigma = smooth ? -sp.opacity * e.gauss * v_alpha : T(0);
-          grads[kOpacity] += smooth ? e.gauss * v_alpha : T(0);
+          const M smooth = Mask::lt(e.raw_alpha, T(io::kAlphaMax), live);
+          const V v_sigma = Mask::select(smooth, -sp.opacity * e.gauss * v_alpha, V{});
+          grads[kOpacity] += Mask::select(smooth, e.gauss * v_alpha, V{});
           // The conic and mean gradients are sums of v_sigma times dx^2 / 2, dx dy, dy^2 / 2,
           // a dx + b dy and c dy + b dx; dy is one value per row, so the lanes gather the
           // moments of dx and dy and the conic combines them once per chunk (below).

@@ -132,6 +132,8 @@ struct LaneMask {
   static M from_vector(M m) { return m; }
   static M ge(const Row<T>& a, T b, M within) { return (a >= b) & within; }  // a >= b where `within`
   static M gt(const Row<T>& a, T b, M within) { return (a > b) & within; }
+  static M lt(const Row<T>& a, T b, M within) { return (a < b) & within; }
+  static M int_less(int32_t a, M b) { return a < b; }  // lanes where a < b's integer lane
   static M and_not(M a, M b) { return a & ~b; }
   static M none() { return M{}; }
   static M all() { return ~M{}; }
@@ -158,6 +160,12 @@ struct LaneMask<float> {
   }
   static M gt(const Row<float>& a, float b, M within) {
     return _mm512_mask_cmp_ps_mask(within, reinterpret_cast<__m512>(a), _mm512_set1_ps(b), _CMP_GT_OQ);
+  }
+  static M lt(const Row<float>& a, float b, M within) {
+    return _mm512_mask_cmp_ps_mask(within, reinterpret_cast<__m512>(a), _mm512_set1_ps(b), _CMP_LT_OQ);
+  }
+  static M int_less(int32_t a, RowInt b) {
+    return _mm512_cmpgt_epi32_mask(reinterpret_cast<__m512i>(b), _mm512_set1_epi32(a));
   }
   static M and_not(M a, M b) { return static_cast<M>(a & ~b); }
   static M none() { return 0; }
