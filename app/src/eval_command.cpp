@@ -1,5 +1,6 @@
 #include "app/eval_command.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -11,10 +12,32 @@
 #include "app/map_io.h"
 #include "app/plot.h"
 #include "app/progress.h"
+#include "mapping/vignetting.h"
 #include "splat/error.h"
 #include "splat/losses.h"
 
 namespace app {
+namespace {
+
+// The camera vignetting the run estimated (summary.json "vignetting"), or none.
+mapping::Vignetting run_vignetting(const std::filesystem::path& run) {
+  mapping::Vignetting v;
+  std::ifstream in(run / "summary.json");
+  if (!in) return v;
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw splat::Error((run / "summary.json").string() + ": not valid JSON");
+  if (!j.contains("vignetting")) return v;
+  const nlohmann::json& k = j["vignetting"];
+  if (!k.is_object() || !k.contains("k1") || !k.contains("k2") || !k["k1"].is_number() || !k["k2"].is_number()) {
+    throw splat::Error((run / "summary.json").string() + ": \"vignetting\" needs numbers k1 and k2");
+  }
+  v.k1 = k["k1"].get<double>();
+  v.k2 = k["k2"].get<double>();
+  if (!std::isfinite(v.k1) || !std::isfinite(v.k2)) throw splat::Error((run / "summary.json").string() + ": vignetting is not finite");
+  return v;
+}
+
+}  // namespace
 
 int run_eval(const EvalOptions& o) {
   const Dataset dataset = open_dataset(o.dataset, o.dataset_options);
@@ -35,14 +58,17 @@ int run_eval(const EvalOptions& o) {
   std::vector<double> te;
   for (const auto& e : dataset.entries) te.push_back(e.timestamp);
   const auto pairs = associate(te, ts, 1e-4);  // the run's lines carry the frames' own timestamps
-  double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0;
+  const mapping::Vignetting vignetting = run_vignetting(o.run);
+  double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0, psnr_radiance = 0;
   std::size_t rendered = 0;
   std::vector<double> frame_times, frame_psnr, frame_ssim;  // per rendered frame, for the plot
   Progress progress("eval renders", pairs.size(), "frames");
   for (std::size_t k = 0; k < pairs.size(); k += static_cast<std::size_t>(std::max(1, o.every))) {
     const splat::RgbdFrame frame = dataset.load(pairs[k].first);
     const splat::Camera cam = splat::posed(frame.camera, estimate[pairs[k].second].T_world_cam.inverse());
-    const splat::ForwardResult f = rasterizer->forward(map.gaussians, cam, {});
+    splat::ForwardResult f = rasterizer->forward(map.gaussians, cam, {});
+    psnr_radiance += splat::psnr(f.rgb, frame.rgb, 3);
+    vignetting.apply(f.rgb, cam);  // compared as the camera records it
     std::vector<float> valid(frame.depth.size()), grad(f.rgb.size());
     for (std::size_t p = 0; p < valid.size(); ++p) valid[p] = frame.depth[p] > 0 ? 1.f : 0.f;
     frame_times.push_back(frame.timestamp);
@@ -67,6 +93,8 @@ int run_eval(const EvalOptions& o) {
       {"rpe_1s", {{"translation_rmse_m", errors.rpe_translation_rmse}, {"rotation_rmse_deg", errors.rpe_rotation_rmse_deg}, {"pairs", errors.rpe_pairs}}},
       {"rendering", {{"frames", rendered}, {"psnr_db", psnr / n}, {"ssim", ssim / n}, {"depth_l1_m", depth_l1 / n},
                      {"psnr_masked_valid_depth_db", psnr_masked / n},
+                     {"psnr_without_vignetting_db", psnr_radiance / n},
+                     {"vignetting", {{"k1", vignetting.k1}, {"k2", vignetting.k2}}},
                      {"per_frame", {{"timestamp", frame_times}, {"psnr_db", frame_psnr}, {"ssim", frame_ssim}}}}},
       {"gaussians", map.gaussians.size()},
   };
@@ -113,9 +141,9 @@ int run_eval(const EvalOptions& o) {
     write_png_rgb8(o.run / "psnr_over_time.png", quality.render());
   }
 
-  std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth), SSIM %.3f, depth L1 %.2f cm -> %s\n",
+  std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth, %.2f dB without vignetting), SSIM %.3f, depth L1 %.2f cm -> %s\n",
               errors.ate_rmse * 100, errors.matched, errors.rpe_translation_rmse * 100, errors.rpe_rotation_rmse_deg,
-              psnr / n, psnr_masked / n, ssim / n, depth_l1 / n * 100, (o.run / "eval.json").c_str());
+              psnr / n, psnr_masked / n, psnr_radiance / n, ssim / n, depth_l1 / n * 100, (o.run / "eval.json").c_str());
   return 0;
 }
 

@@ -61,12 +61,13 @@ int run_reconstruct(const ReconstructOptions& o) {
         [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map().size()) + " Gaussians"); });
     refine_progress.finish();
     outputs.update_poses(refined.T_world_cam);
-    const std::size_t pruned = refined.pruned;
+    // The camera's vignetting as the refinement estimated it: gslam eval renders through it.
+    outputs.extra()["vignetting"] = {{"k1", slam.vignetting().k1}, {"k2", slam.vignetting().k2}};
     outputs.extra()["refinement"] = {{"frames", refine_frames}, {"passes", config.refine_passes},
-                                     {"iterations_per_visit", config.refine_iterations}, {"pruned", pruned},
+                                     {"iterations_per_visit", config.refine_iterations}, {"pruned", refined.pruned},
                                      {"seconds", refine_progress.elapsed_seconds()}};
     std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned\n",
-                 refine_frames, config.refine_passes, refine_progress.elapsed_seconds(), pruned);
+                 refine_frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned);
   }
   std::vector<StampedPose> truth;
   for (const auto& e : dataset.entries) {

@@ -42,6 +42,14 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "resolution_factor", c.mapping.resolution_factor);
       get(m, "refine_resolution_factor", c.mapping.refine_resolution_factor);
       get(m, "seed_stride", c.mapping.seed.stride);
+      get(m, "seed_scale_factor", c.mapping.seed.scale_factor);
+      get(m, "sh_degree", c.mapping.seed.sh_degree);
+      get(m, "color_weight", c.mapping.color_weight);
+      get(m, "ssim_weight", c.mapping.ssim_weight);
+      get(m, "depth_weight", c.mapping.depth_weight);
+      get(m, "refine_depth_weight", c.mapping.refine_depth_weight);
+      get(m, "densify_alpha", c.mapping.densify_alpha);
+      get(m, "prune_max_scale", c.mapping.prune_max_scale);
       get(m, "isotropic", c.mapping.isotropic);
       get(m, "pose_learning_rate", c.mapping.pose_learning_rate);
       get(m, "pose_rotation_learning_rate", c.mapping.pose_rotation_learning_rate);
@@ -49,6 +57,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "refine_depth_alpha_threshold", c.mapping.refine_depth_alpha_threshold);
       get(m, "refine_learning_rate_scale", c.mapping.refine_learning_rate_scale);
       get(m, "refine_pose_rate_scale", c.mapping.refine_pose_rate_scale);
+      get(m, "refine_vignetting_rate", c.mapping.refine_vignetting_rate);
     }
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());

@@ -15,7 +15,12 @@ void MapperConfig::validate() const {
   if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
   if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
   if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
+  if (!(seed.scale_factor > 0) || seed.stride < 1) fail("seed scale_factor must be positive and stride >= 1");
+  if (seed.sh_degree < 0 || seed.sh_degree > 3) fail("sh_degree must be 0 to 3");
+  if (!(color_weight >= 0 && ssim_weight >= 0 && depth_weight >= 0 && refine_depth_weight >= 0)) fail("loss weights must be >= 0");
+  if (!(densify_alpha >= 0 && densify_alpha <= 1)) fail("densify_alpha must be in [0, 1]");
   if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
+  if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -75,19 +80,38 @@ std::vector<Mapper::Keyframe*> Mapper::window_for(Keyframe& newest) {
   return window;
 }
 
+namespace {
+
+// One Adam step of a few camera parameters (a pose's six, the vignetting's two), each with its
+// own rate; `steps` counts this state's steps.
+void adam_step(int n, double* params, const double* gradient, const double* rates, double* m, double* v, int& steps) {
+  const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
+  const double t = ++steps;
+  for (int k = 0; k < n; ++k) {
+    splat::adam_update(params[k], gradient[k], m[k], v[k], rates[k], 1 - std::pow(hyper.beta1, t),
+                       1 - std::pow(hyper.beta2, t), hyper);
+  }
+}
+
+}  // namespace
+
 void Mapper::step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
                        double rate_scale) const {
   const bool moves = rate_scale > 0 && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0);
   if (!moves) return;
-  const splat::AdamHyper hyper{0.9, 0.999, 1e-12};
-  const double t = ++adam.steps;
+  double rates[6];
+  for (int k = 0; k < 6; ++k) rates[k] = rate_scale * (k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate);
   splat::Vector6d delta = splat::Vector6d::Zero();
-  for (int k = 0; k < 6; ++k) {
-    const double rate = rate_scale * (k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate);
-    splat::adam_update(delta[k], gradient[k], adam.m[k], adam.v[k], rate, 1 - std::pow(hyper.beta1, t),
-                       1 - std::pow(hyper.beta2, t), hyper);
-  }
+  adam_step(6, delta.data(), gradient.data(), rates, adam.m.data(), adam.v.data(), adam.steps);
   T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * T_cam_world);
+}
+
+void Mapper::step_vignetting(const std::array<double, 2>& gradient) {
+  double k[2] = {vignetting_.k1, vignetting_.k2};
+  const double rates[2] = {config_.refine_vignetting_rate, config_.refine_vignetting_rate};
+  adam_step(2, k, gradient.data(), rates, vignetting_adam_.m, vignetting_adam_.v, vignetting_adam_.steps);
+  vignetting_.k1 = k[0];
+  vignetting_.k2 = k[1];
 }
 
 double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
@@ -96,14 +120,27 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   splat::ImageGrads d;
   d.rgb.assign(render.rgb.size(), 0.f);
   d.depth.assign(render.depth.size(), 0.f);
-  double loss = splat::l1_loss<float>(render.rgb, f.rgb, 3, {}, d.rgb, config_.color_weight);
+  // The colour losses compare what the camera records: the render through its vignetting.
+  const bool learn_vignetting = step == Step::kRefine && config_.refine_vignetting_rate > 0;
+  const bool vignetted = learn_vignetting || vignetting_.k1 != 0 || vignetting_.k2 != 0;
+  std::vector<float> recorded;
+  if (vignetted) {
+    recorded = render.rgb;
+    vignetting_.apply(recorded, f.camera);
+  }
+  const std::vector<float>& colour = vignetted ? recorded : render.rgb;
+  double loss = splat::l1_loss<float>(colour, f.rgb, 3, {}, d.rgb, config_.color_weight);
   if (config_.ssim_weight > 0) {
-    loss += splat::dssim_loss<float>(render.rgb, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
+    loss += splat::dssim_loss<float>(colour, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
+  }
+  if (vignetted) {
+    const std::array<double, 2> d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);
+    if (learn_vignetting) step_vignetting(d_vignetting);
   }
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
-                                                 config_.depth_weight);
+                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);

@@ -79,6 +79,7 @@ class SlamSystem {
   SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config);
   FrameRecord process(const splat::RgbdFrame& frame);
   const splat::Gaussians& map() const { return mapper_.map(); }
+  const mapping::Vignetting& vignetting() const { return mapper_.vignetting(); }
   std::size_t keyframes_added() const { return keyframes_; }
   // The frames refine_map visits, by index into `records`.
   std::vector<std::size_t> refine_frames(const std::vector<FrameRecord>& records) const;
