@@ -123,6 +123,19 @@ TEST(CliReconstruct, SyntheticDefaultWritesEveryOutputAndEvalReadsThem) {
   double mean = 0;
   for (double v : per_frame_psnr) mean += v / double(per_frame_psnr.size());
   EXPECT_NEAR(mean, rendering.at("psnr_db").get<double>(), 1e-9);
+  // The refinement's vignetting is in the summary, and eval reports the raw renders too.
+  std::ifstream summary_file(dir / "run" / "summary.json");
+  const auto vignetting = nlohmann::json::parse(summary_file).at("vignetting");
+  EXPECT_TRUE(vignetting.at("k1").is_number() && vignetting.at("k2").is_number()) << vignetting;
+  EXPECT_TRUE(rendering.at("psnr_without_vignetting_db").is_number());
+  {
+    std::ofstream bad(dir / "run" / "summary.json");
+    bad << R"({"vignetting": {"k1": "strong"}})";
+  }
+  const RunResult bad_vignetting = run_gslam("eval " + (dir / "run").string() + " --dataset " + (dir / "run" / "synthetic_input").string());
+  EXPECT_NE(bad_vignetting.exit_code, 0);
+  EXPECT_NE(bad_vignetting.output.find("summary.json: \"vignetting\" needs numbers k1 and k2"), std::string::npos)
+      << bad_vignetting.output;
   const RunResult missing = run_gslam("reconstruct " + (dir / "nowhere").string() + " --out " + (dir / "x").string());
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.output.find("dataset folder does not exist"), std::string::npos) << missing.output;
