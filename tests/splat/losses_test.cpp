@@ -94,6 +94,9 @@ TEST(Losses, KnownValues) {
   EXPECT_EQ(grad[3], 0.f);
   std::fill(grad.begin(), grad.end(), 0.f);
   EXPECT_NEAR(splat::dssim_loss<float>(pred, pred, 2, 2, 1, grad), 0.0, 1e-9) << "identical images";
+  const std::vector<double> pred_d(pred.begin(), pred.end());
+  std::vector<double> grad_d(4, 0.0);
+  EXPECT_NEAR(splat::dssim_loss<double>(pred_d, pred_d, 2, 2, 1, grad_d), 0.0, 1e-15) << "identical images, double";
   EXPECT_NEAR(splat::psnr(std::vector<float>(12, 0.5f), std::vector<float>(12, 0.6f), 3), 20.0, 1e-4);
 }
 
