@@ -34,6 +34,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(t, "color_weight", c.tracking.color_weight);
       get(t, "color_max_factor", c.tracking.color_max_factor);
       get(t, "alpha_threshold", c.tracking.alpha_threshold);
+      get(t, "min_step_translation", c.tracking.min_step_translation);
+      get(t, "min_step_rotation", c.tracking.min_step_rotation);
     }
     if (j.contains("mapping")) {
       const auto& m = j.at("mapping");

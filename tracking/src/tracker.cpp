@@ -17,6 +17,7 @@ void TrackingConfig::validate() const {
   if (!(color_weight >= 0)) fail("color_weight must be >= 0");
   if (color_max_factor < 1) fail("color_max_factor must be >= 1");
   if (!(alpha_threshold >= 0 && alpha_threshold < 1)) fail("alpha_threshold must be in [0, 1)");
+  if (!(min_step_translation >= 0 && min_step_rotation >= 0)) fail("min_step_translation and min_step_rotation must be >= 0");
 }
 
 namespace {
