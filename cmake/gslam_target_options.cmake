@@ -14,6 +14,12 @@ function(gslam_target_options target)
       target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized -Wno-array-bounds)
     endif()
   endif()
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    # The CPU backend's 64-byte row vectors (splat/src/cpu/lanes.h) make GCC note, on targets
+    # without AVX-512, that passing them by value differs from AVX-512 code. They never cross a
+    # library boundary (every function taking them is inline), so the note says nothing here.
+    target_compile_options(${target} PRIVATE -Wno-psabi)
+  endif()
   # Lets `#pragma omp simd` loops call the vectorised libm (libmvec) without OpenMP threads.
   # -fno-trapping-math lets GCC if-convert float selects (we never read FP exception flags).
   target_compile_options(${target} PRIVATE -fopenmp-simd -fno-math-errno -fno-trapping-math)
