@@ -61,10 +61,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
   using Mask = LaneMask<T>;
   using M = typename Mask::M;
 
-  V lane{};
-  RowInt row_index{};
-  for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
-  const V centre = lane + T(0.5);
+  const TileLanes<T> lanes;
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -96,7 +93,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
     RowInt max_last{};
     for (int y = 0; y < kTile; ++y) max_last[y] = row_max_last[y];
-    const V px = centre + T(geo.x0), py = centre + T(geo.y0);
+    const V px = lanes.centre + T(geo.x0), py = lanes.centre + T(geo.y0);
     // Back to front in chunks, as the forward pass goes front to back: chunk splat k (the k-th
     // from the back) reaches the rows of bit k, and its gradients add up per lane over the rows.
     Chunk<T> chunk;
@@ -120,7 +117,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
         const int32_t s = c - 1 - j;
         kept[count] = &chunk.splat[j];
         chunk_pos[count] = s;
-        const RowInt reached = row_index >= chunk.first[j] && row_index < chunk.end[j] && s < max_last;
+        const RowInt reached = lanes.index_int >= chunk.first[j] && lanes.index_int < chunk.end[j] && s < max_last;
         row_bits |= reached ? int32_t(1u << count) : 0;
         count += any_lane(reached);
       }

@@ -137,6 +137,18 @@ inline T blended(int32_t s, int32_t last, const PixelEval<T>& e) {  // int32: ha
   return alpha_here >= T(io::kAlphaMin) ? T(1) : T(0);
 }
 
+// Lane x of a tile row as a value: its index, and its pixel centre's offset from the tile's
+// corner (px = centre + x0, and the same row of values serves the rows' centres).
+template <typename T>
+struct TileLanes {
+  Row<T> index{}, centre{};
+  RowInt index_int{};
+  TileLanes() {
+    for (int x = 0; x < kTile; ++x) index[x] = T(x), index_int[x] = x;
+    centre = index + T(0.5);
+  }
+};
+
 struct TileGeometry {
   int x0, y0;          // first pixel of the tile
   int width, height;   // pixels of the tile inside the image

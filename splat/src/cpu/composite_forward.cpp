@@ -36,10 +36,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
-  V lane{};
-  RowInt row_index{};
-  for (int x = 0; x < kTile; ++x) lane[x] = T(x), row_index[x] = x;
-  const V centre = lane + T(0.5);
+  const TileLanes<T> lanes;
 
   pool.parallel_for(static_cast<std::size_t>(f.tiles_x) * f.tiles_y, [&](std::size_t tile) {
     const TileGeometry geo = tile_geometry(static_cast<int>(tile), f.tiles_x, w, h);
@@ -52,11 +49,11 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
       acc_r[y] = acc_g[y] = acc_b[y] = acc_z[y] = V{};
       last[y] = RowMask{};
       // Pixels past the image edge start finished so they never hold the tile open.
-      row_done[y] = Mask::from_vector((lane >= T(geo.width)) | (RowMask{} - (y >= geo.height)));
+      row_done[y] = Mask::from_vector((lanes.index >= T(geo.width)) | (RowMask{} - (y >= geo.height)));
       block_live[y / kBlockRows] += y < geo.height ? geo.width : 0;
     }
     int remaining = geo.width * geo.height;
-    const V px = centre + T(geo.x0), py = centre + T(geo.y0);
+    const V px = lanes.centre + T(geo.x0), py = lanes.centre + T(geo.y0);
     Chunk<T> chunk;
     const Splat<T>* kept[kChunkSplats];  // the chunk's splats that reach a row, in order
     int32_t chunk_next_last[kChunkSplats];
@@ -76,7 +73,7 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
         // half of all intersections reach none), and a branch on it would mispredict.
         kept[count] = &chunk.splat[j];
         chunk_next_last[count] = static_cast<int32_t>(c + j + 1);
-        row_bits |= (row_index >= chunk.first[j] && row_index < chunk.end[j]) ? int32_t(1u << count) : 0;
+        row_bits |= (lanes.index_int >= chunk.first[j] && lanes.index_int < chunk.end[j]) ? int32_t(1u << count) : 0;
         count += chunk.first[j] < chunk.end[j];
       }
       for (int k = 0; k < count; ++k) terms[k] = SigmaTerms<T>(*kept[k], px, py);
