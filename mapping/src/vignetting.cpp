@@ -33,7 +33,7 @@ void Vignetting::apply(std::span<float> rgb, const splat::Camera& camera) const 
   check_size(camera, rgb.size());
   if (k1 == 0 && k2 == 0) return;
   for_each_pixel(camera, rgb.size(), [&](std::size_t p, double r2) {
-    const float g = static_cast<float>(1 + r2 * (k1 + r2 * k2));
+    const float g = static_cast<float>(gain_at(r2));
     for (int c = 0; c < 3; ++c) rgb[p * 3 + c] *= g;
   });
 }
@@ -43,7 +43,7 @@ std::array<double, 2> Vignetting::backward(std::span<const float> radiance, std:
   if (radiance.size() != d_rgb.size()) throw splat::Error("Vignetting: radiance and gradient sizes differ");
   std::array<double, 2> d_k{0, 0};
   for_each_pixel(camera, d_rgb.size(), [&](std::size_t p, double r2) {
-    const float g = static_cast<float>(1 + r2 * (k1 + r2 * k2));
+    const float g = static_cast<float>(gain_at(r2));
     double d_gain = 0;  // dL/d(gain) at this pixel
     for (int c = 0; c < 3; ++c) {
       d_gain += static_cast<double>(d_rgb[p * 3 + c]) * radiance[p * 3 + c];

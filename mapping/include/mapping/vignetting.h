@@ -14,10 +14,8 @@ namespace mapping {
 struct Vignetting {
   double k1 = 0, k2 = 0;
 
-  double gain(double x_norm, double y_norm) const {
-    const double r2 = x_norm * x_norm + y_norm * y_norm;
-    return 1 + r2 * (k1 + r2 * k2);
-  }
+  double gain(double x_norm, double y_norm) const { return gain_at(x_norm * x_norm + y_norm * y_norm); }
+  double gain_at(double r2) const { return 1 + r2 * (k1 + r2 * k2); }  // r2 = r^2
   // Multiplies an [H, W, 3] image (radiance) by the gain in place: what the camera records.
   void apply(std::span<float> rgb, const splat::Camera& camera) const;
   // Back through apply(): turns dL/d(recorded) into dL/d(radiance) in place, given the radiance,

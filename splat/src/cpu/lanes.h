@@ -121,7 +121,22 @@ inline void store_row(Out* out, const Lanes& row, int count) {
   std::memcpy(out, &row, count == kRowLanes ? sizeof(Lanes) : static_cast<std::size_t>(count) * sizeof(Out));
 }
 
-// Per-lane booleans of a row and the few operations the forward pass needs on them. In
+template <typename M>
+inline bool any_lane(const M& mask) {
+  for (int x = 0; x < kRowLanes; ++x)
+    if (mask[x]) return true;
+  return false;
+}
+#if defined(__AVX512F__)
+// Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
+template <>
+inline bool any_lane(const RowMaskOf<float>& mask) {
+  const __m512i lanes = reinterpret_cast<__m512i>(mask);
+  return _mm512_test_epi32_mask(lanes, lanes) != 0;
+}
+#endif
+
+// Per-lane booleans of a row and the few operations the compositing passes need on them. In
 // general a vector of all-ones or zero lanes, as GCC's comparisons give; for float rows with
 // AVX-512 a mask register, which compares write and selects read directly (GCC 12 keeps
 // vector masks in vector registers and converts at every use: a fifth of the forward's
@@ -139,11 +154,7 @@ struct LaneMask {
   static M all() { return ~M{}; }
   static Row<T> select(M m, const Row<T>& a, const Row<T>& b) { return m ? a : b; }
   static M select(M m, int32_t a, M b) { return m ? M{} + a : b; }
-  static bool any(M m) {
-    for (int x = 0; x < kRowLanes; ++x)
-      if (m[x]) return true;
-    return false;
-  }
+  static bool any(M m) { return any_lane(m); }
   static int count(M m) {
     int n = 0;
     for (int x = 0; x < kRowLanes; ++x) n += m[x] != 0;
@@ -179,21 +190,6 @@ struct LaneMask<float> {
   static bool any(M m) { return m != 0; }
   static int count(M m) { return std::popcount(static_cast<unsigned>(m)); }
 };
-#endif
-
-template <typename M>
-inline bool any_lane(const M& mask) {
-  for (int x = 0; x < kRowLanes; ++x)
-    if (mask[x]) return true;
-  return false;
-}
-#if defined(__AVX512F__)
-// Tests into mask registers; GCC 12 makes the loop above a long chain of extracts.
-template <>
-inline bool any_lane(const RowMaskOf<float>& mask) {
-  const __m512i lanes = reinterpret_cast<__m512i>(mask);
-  return _mm512_test_epi32_mask(lanes, lanes) != 0;
-}
 #endif
 
 }  // namespace splat::cpu
