@@ -152,7 +152,8 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::vector<FrameRecord>& re
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
       Eigen::Isometry3d T_cam_world = result.T_world_cam[i].inverse();
-      mapper_.refine(load(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations);
+      mapper_.refine(load(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations,
+                     pass < config_.refine_densify_passes);
       result.T_world_cam[i] = T_cam_world.inverse();
       if (visited) visited(++done, total);
     }

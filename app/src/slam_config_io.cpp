@@ -24,6 +24,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
     get(j, "refine_passes", c.refine_passes);
     get(j, "refine_iterations", c.refine_iterations);
     get(j, "refine_all_frames", c.refine_all_frames);
+    get(j, "refine_densify_passes", c.refine_densify_passes);
     get(j, "relocalize_iterations", c.relocalize_iterations);
     if (j.contains("tracking")) {
       const auto& t = j.at("tracking");
@@ -50,7 +51,10 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "ssim_weight", c.mapping.ssim_weight);
       get(m, "depth_weight", c.mapping.depth_weight);
       get(m, "refine_depth_weight", c.mapping.refine_depth_weight);
+      get(m, "depth_falloff", c.mapping.depth_falloff);
+      get(m, "refine_depth_falloff", c.mapping.refine_depth_falloff);
       get(m, "densify_alpha", c.mapping.densify_alpha);
+      get(m, "refine_seed_depth_holes", c.mapping.refine_seed_depth_holes);
       get(m, "prune_max_scale", c.mapping.prune_max_scale);
       get(m, "isotropic", c.mapping.isotropic);
       get(m, "pose_learning_rate", c.mapping.pose_learning_rate);
@@ -64,8 +68,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());
   }
-  if (c.refine_passes < 0 || c.refine_iterations < 0) {
-    throw splat::Error(path.string() + ": refine_passes and refine_iterations must be >= 0");
+  if (c.refine_passes < 0 || c.refine_iterations < 0 || c.refine_densify_passes < 0) {
+    throw splat::Error(path.string() + ": refine_passes, refine_iterations and refine_densify_passes must be >= 0");
   }
   c.tracking.validate();
   c.mapping.validate();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mapping/depth_holes.h"
 #include "splat/adam.h"
 #include "splat/error.h"
 #include "splat/losses.h"
@@ -21,6 +22,9 @@ void MapperConfig::validate() const {
   if (!(densify_alpha >= 0 && densify_alpha <= 1)) fail("densify_alpha must be in [0, 1]");
   if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
   if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
+  if (!(depth_falloff >= 0 && depth_falloff <= 4 && refine_depth_falloff >= 0 && refine_depth_falloff <= 4)) {
+    fail("depth_falloff and refine_depth_falloff must be in [0, 4]");
+  }
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -33,11 +37,10 @@ Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)
   map_.sh_degree = config_.seed.sh_degree;
 }
 
-std::size_t Mapper::densify(const Keyframe& kf) {
-  const splat::RgbdFrame& f = kf.frame;
+std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes) {
   std::vector<float> mask(f.depth.size(), 1.f);
   if (!map_.empty()) {
-    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
+    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, T_cam_world), splat::images_only());
     std::vector<float> errors;
     for (std::size_t p = 0; p < f.depth.size(); ++p) {
       if (f.depth[p] > 0 && render.alpha[p] > config_.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));
@@ -54,7 +57,14 @@ std::size_t Mapper::densify(const Keyframe& kf) {
       mask[p] = uncovered || in_front ? 1.f : 0.f;
     }
   }
-  const std::size_t added = seed_from_depth(f, kf.T_cam_world.inverse(), config_.seed, map_, mask);
+  std::size_t added = 0;
+  if (fill_holes) {
+    splat::RgbdFrame filled = f;
+    filled.depth = fill_depth_holes(f.depth, f.width(), f.height());
+    added = seed_from_depth(filled, T_cam_world.inverse(), config_.seed, map_, mask);
+  } else {
+    added = seed_from_depth(f, T_cam_world.inverse(), config_.seed, map_, mask);
+  }
   adam_.append(added, map_.sh_degree);
   return added;
 }
@@ -139,8 +149,17 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   }
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
+  const double falloff = step == Step::kWindow ? config_.depth_falloff : config_.refine_depth_falloff;
+  std::vector<float> depth_weights;
+  if (falloff != 0) {
+    depth_weights.resize(f.depth.size());
+    for (std::size_t p = 0; p < f.depth.size(); ++p) {
+      depth_weights[p] = f.depth[p] > 0 ? static_cast<float>(std::pow(f.depth[p], -falloff)) : 0.f;
+    }
+  }
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
-                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
+                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight,
+                                                 depth_weights);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);
@@ -180,9 +199,11 @@ std::size_t Mapper::prune() {
   return removed;
 }
 
-double Mapper::refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations) {
+double Mapper::refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations,
+                      bool densify_first) {
   if (map_.empty()) return 0;
   Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
+  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes);
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
   T_cam_world = kf.T_cam_world;
@@ -199,7 +220,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   MappingStats stats;
   keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
-  stats.added = densify(newest);
+  stats.added = densify(newest.frame, newest.T_cam_world, false);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();
   // Half the steps on the new keyframe, the rest spread over the window at random.

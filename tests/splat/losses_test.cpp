@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "splat/error.h"
 #include "splat/losses.h"
 #include "support/expect_error.h"
 #include "support/gradient_check.h"
@@ -62,15 +63,23 @@ TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
   for (std::size_t p = 0; p < depth.pred.size(); ++p) alpha.push_back(p % 3 == 0 ? low(rng) : high(rng));
   for (std::size_t i = 0; i < depth.target.size(); i += 5) depth.target[i] = 0;  // no measurement
   constexpr double kThreshold = 0.9;
+  std::vector<double> pixel_weights;  // the per-pixel weights, for the second round
   auto loss = [&](std::span<double> g_depth, std::span<double> g_alpha) {
-    return splat::silhouette_depth_l1_loss<double>(depth.pred, alpha, depth.target, kThreshold, g_depth, g_alpha, 0.8);
+    return splat::silhouette_depth_l1_loss<double>(depth.pred, alpha, depth.target, kThreshold, g_depth, g_alpha, 0.8,
+                                                   pixel_weights);
   };
   const std::size_t n = depth.pred.size();
-  std::vector<double> g_depth(n, 0.0), g_alpha(n, 0.0), scratch_d(n), scratch_a(n);
-  loss(g_depth, g_alpha);
-  auto value = [&] { return std::vector<double>{loss(scratch_d, scratch_a)}; };
-  gslam::test::expect_gradients_match("silhouette_depth d/dD", g_depth, [&](std::size_t i, double d) { depth.pred[i] += d; }, value);
-  gslam::test::expect_gradients_match("silhouette_depth d/dA", g_alpha, [&](std::size_t i, double d) { alpha[i] += d; }, value);
+  auto value_and_check = [&](const std::string& name) {
+    std::vector<double> g_depth(n, 0.0), g_alpha(n, 0.0), scratch_d(n), scratch_a(n);
+    loss(g_depth, g_alpha);
+    auto value = [&] { return std::vector<double>{loss(scratch_d, scratch_a)}; };
+    gslam::test::expect_gradients_match(name + " d/dD", g_depth, [&](std::size_t i, double d) { depth.pred[i] += d; }, value);
+    gslam::test::expect_gradients_match(name + " d/dA", g_alpha, [&](std::size_t i, double d) { alpha[i] += d; }, value);
+  };
+  value_and_check("silhouette_depth");
+  std::uniform_real_distribution<double> positive(0.1, 2.0);
+  for (std::size_t p = 0; p < n; ++p) pixel_weights.push_back(positive(rng));
+  value_and_check("silhouette_depth weighted");
   // Known value: normalized above the threshold, raw below; unmeasured pixels ignored.
   const std::vector<float> d = {1.0f, 1.0f, 2.0f}, a = {0.5f, 0.95f, 1.0f}, t = {0.8f, 1.0f, 0.f};
   std::vector<float> gd(3, 0.f), ga(3, 0.f);
@@ -78,6 +87,12 @@ TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
   EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga), expected, 1e-6);
   EXPECT_EQ(ga[0], 0.f) << "below the threshold alpha gets no gradient";
   EXPECT_EQ(gd[2], 0.f) << "no measurement, no gradient";
+  // Per-pixel weights scale each residual; the mean still divides by the measured pixels.
+  const std::vector<float> w = {2.0f, 0.5f, 7.0f};
+  const double weighted = (2.0 * std::abs(1.0 - 0.8) + 0.5 * std::abs(1.0 / 0.95 - 1.0)) / 2;
+  EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga, 1.0, w), weighted, 1e-6);
+  EXPECT_THROW(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga, 1.0, std::vector<float>(2, 1.f)),
+               splat::Error);
 }
 
 TEST(Losses, KnownValues) {

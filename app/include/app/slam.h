@@ -28,6 +28,9 @@ struct SlamConfig {
   // Sweep every tracked frame instead of the keyframes alone: more viewpoints for the same
   // number of steps.
   bool refine_all_frames = false;
+  // The first this many passes also densify each visited frame (Mapper::refine), covering
+  // what no keyframe saw.
+  int refine_densify_passes = 0;
   // Then re-track every refined frame but the first against the final map, from its current
   // pose, with this many Levenberg-Marquardt iterations at the finest tracking level (0: off).
   int relocalize_iterations = 0;

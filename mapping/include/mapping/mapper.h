@@ -22,6 +22,9 @@ struct MapperConfig {
   double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
   // The depth weight in the final refinement, where the map is tuned to render the frames.
   double refine_depth_weight = 1.0;
+  // Each pixel's depth residual is weighted by (1 m / measured depth)^falloff: a depth camera's
+  // noise grows with distance (as z^2 for the Kinect), and far noise fought the colour.
+  double depth_falloff = 0, refine_depth_falloff = 0;
   // Depth is compared as D/A where the rendered silhouette A exceeds this, as D elsewhere
   // (splat::silhouette_depth_l1_loss). Synthetic room, 30 frames, keyframe poses refined:
   // ATE 0.54 cm comparing D everywhere, 0.31 cm with this.
@@ -44,6 +47,11 @@ struct MapperConfig {
   // depth is in front of the render by more than depth_error_factor x the median error.
   double densify_alpha = 0.5;
   double depth_error_factor = 10.0;
+  // The final refinement's densification (refine()) also seeds uncovered pixels that have no
+  // depth measurement, at depth filled in from their neighbours (fill_depth_holes); otherwise
+  // the map leaves them empty. Keyframes seed measured pixels alone: their Gaussians are the
+  // ones tracking renders.
+  bool refine_seed_depth_holes = false;
   SeedConfig seed;  // stride at the mapping resolution
   // Pruning after each optimization.
   double prune_opacity = 0.005;
@@ -82,10 +90,12 @@ class Mapper {
 
   // Final refinement: `iterations` Adam steps of the map on one earlier frame (at
   // refine_resolution_factor), which the bounded keyframe store may have dropped. Sweeping every frame this
-  // way undoes what later windows did to regions they saw poorly. No densification or pruning.
+  // way undoes what later windows did to regions they saw poorly. With `densify`, Gaussians are
+  // first added where the frame sees what the map lacks (as for a keyframe); no pruning.
   // Where `pose` is given (and refine_pose_rate_scale > 0) the frame's pose moves with the map,
   // with that Adam state; otherwise it stays.
-  double refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations);
+  double refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations,
+                bool densify = false);
   // Removes transparent and oversized Gaussians; returns how many.
   std::size_t prune();
 
@@ -102,7 +112,9 @@ class Mapper {
     std::size_t number = 0;  // in the order added; 0 is the world frame
     PoseAdam pose = {};
   };
-  std::size_t densify(const Keyframe& kf);
+  // Seeds Gaussians where the frame (at its pose) sees what the map lacks, and with
+  // `fill_holes` where it has no depth too; returns how many.
+  std::size_t densify(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, bool fill_holes);
   std::vector<Keyframe*> window_for(Keyframe& newest);
   // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose (but
   // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose
