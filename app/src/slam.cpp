@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "splat/se3.h"
@@ -148,11 +149,24 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::vector<FrameRecord>& re
   std::mt19937 rng(1);
   const std::size_t total = frames.size() * static_cast<std::size_t>(config_.refine_passes);
   std::size_t done = 0;
+  // Frames kept in memory (bounded by refine_cache_mib), the others reloaded on each visit.
+  std::vector<std::optional<splat::RgbdFrame>> cache(records.size());
+  double cached_mib = 0;
+  auto frame_at = [&](std::size_t i) -> splat::RgbdFrame {
+    if (cache[i]) return *cache[i];
+    splat::RgbdFrame f = mapper_.refinement_frame(load(i));
+    const double mib = static_cast<double>((f.rgb.size() + f.depth.size()) * sizeof(float)) / (1 << 20);
+    if (cached_mib + mib <= config_.refine_cache_mib) {
+      cached_mib += mib;
+      cache[i] = f;
+    }
+    return f;
+  };
   for (int pass = 0; pass < config_.refine_passes; ++pass) {
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
       Eigen::Isometry3d T_cam_world = result.T_world_cam[i].inverse();
-      mapper_.refine(load(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations,
+      mapper_.refine(frame_at(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations,
                      pass < config_.refine_densify_passes);
       result.T_world_cam[i] = T_cam_world.inverse();
       if (visited) visited(++done, total);

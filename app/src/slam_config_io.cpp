@@ -25,6 +25,7 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
     get(j, "refine_iterations", c.refine_iterations);
     get(j, "refine_all_frames", c.refine_all_frames);
     get(j, "refine_densify_passes", c.refine_densify_passes);
+    get(j, "refine_cache_mib", c.refine_cache_mib);
     get(j, "relocalize_iterations", c.relocalize_iterations);
     if (j.contains("tracking")) {
       const auto& t = j.at("tracking");
@@ -51,8 +52,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "ssim_weight", c.mapping.ssim_weight);
       get(m, "depth_weight", c.mapping.depth_weight);
       get(m, "refine_depth_weight", c.mapping.refine_depth_weight);
-      get(m, "depth_falloff", c.mapping.depth_falloff);
-      get(m, "refine_depth_falloff", c.mapping.refine_depth_falloff);
+      get(m, "depth_tolerance", c.mapping.depth_tolerance);
+      get(m, "refine_depth_tolerance", c.mapping.refine_depth_tolerance);
       get(m, "densify_alpha", c.mapping.densify_alpha);
       get(m, "refine_seed_depth_holes", c.mapping.refine_seed_depth_holes);
       get(m, "prune_max_scale", c.mapping.prune_max_scale);
@@ -68,8 +69,8 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
   } catch (const nlohmann::json::exception& e) {
     throw splat::Error(path.string() + ": " + e.what());
   }
-  if (c.refine_passes < 0 || c.refine_iterations < 0 || c.refine_densify_passes < 0) {
-    throw splat::Error(path.string() + ": refine_passes, refine_iterations and refine_densify_passes must be >= 0");
+  if (c.refine_passes < 0 || c.refine_iterations < 0 || c.refine_densify_passes < 0 || !(c.refine_cache_mib >= 0)) {
+    throw splat::Error(path.string() + ": refine_passes, refine_iterations, refine_densify_passes and refine_cache_mib must be >= 0");
   }
   c.tracking.validate();
   c.mapping.validate();

@@ -22,9 +22,7 @@ void MapperConfig::validate() const {
   if (!(densify_alpha >= 0 && densify_alpha <= 1)) fail("densify_alpha must be in [0, 1]");
   if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
   if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
-  if (!(depth_falloff >= 0 && depth_falloff <= 4 && refine_depth_falloff >= 0 && refine_depth_falloff <= 4)) {
-    fail("depth_falloff and refine_depth_falloff must be in [0, 4]");
-  }
+  if (!(depth_tolerance >= 0 && refine_depth_tolerance >= 0)) fail("depth tolerances must be >= 0");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -149,17 +147,15 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   }
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
-  const double falloff = step == Step::kWindow ? config_.depth_falloff : config_.refine_depth_falloff;
-  std::vector<float> depth_weights;
-  if (falloff != 0) {
-    depth_weights.resize(f.depth.size());
-    for (std::size_t p = 0; p < f.depth.size(); ++p) {
-      depth_weights[p] = f.depth[p] > 0 ? static_cast<float>(std::pow(f.depth[p], -falloff)) : 0.f;
-    }
+  const double tolerance = step == Step::kWindow ? config_.depth_tolerance : config_.refine_depth_tolerance;
+  std::vector<float> depth_band;
+  if (tolerance > 0) {
+    depth_band.resize(f.depth.size());
+    for (std::size_t p = 0; p < f.depth.size(); ++p) depth_band[p] = static_cast<float>(tolerance) * f.depth[p] * f.depth[p];
   }
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
                                                  step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight,
-                                                 depth_weights);
+                                                 depth_band);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);
@@ -199,10 +195,14 @@ std::size_t Mapper::prune() {
   return removed;
 }
 
-double Mapper::refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations,
-                      bool densify_first) {
+splat::RgbdFrame Mapper::refinement_frame(const splat::RgbdFrame& frame) const {
+  return splat::downsample(frame, config_.refine_resolution_factor);
+}
+
+double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
+                      int iterations, bool densify_first) {
   if (map_.empty()) return 0;
-  Keyframe kf{splat::downsample(frame, config_.refine_resolution_factor), T_cam_world};
+  Keyframe kf{refinement_frame, T_cam_world};
   if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes);
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);

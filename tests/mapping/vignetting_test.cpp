@@ -94,7 +94,7 @@ TEST(Vignetting, RefinementLearnsTheFramesFallOffAndNoneWhereThereIsNone) {
     for (int pass = 0; pass < 20; ++pass) {
       for (const std::size_t i : frames) {
         Eigen::Isometry3d pose = dataset.entries[i].T_world_cam_truth->inverse();
-        mapper.refine(load(i), pose, nullptr, 1);
+        mapper.refine(mapper.refinement_frame(load(i)), pose, nullptr, 1);
       }
     }
     return mapper.vignetting();

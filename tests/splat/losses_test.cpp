@@ -63,10 +63,10 @@ TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
   for (std::size_t p = 0; p < depth.pred.size(); ++p) alpha.push_back(p % 3 == 0 ? low(rng) : high(rng));
   for (std::size_t i = 0; i < depth.target.size(); i += 5) depth.target[i] = 0;  // no measurement
   constexpr double kThreshold = 0.9;
-  std::vector<double> pixel_weights;  // the per-pixel weights, for the second round
+  std::vector<double> tolerance;  // the per-pixel noise bands, for the second round
   auto loss = [&](std::span<double> g_depth, std::span<double> g_alpha) {
     return splat::silhouette_depth_l1_loss<double>(depth.pred, alpha, depth.target, kThreshold, g_depth, g_alpha, 0.8,
-                                                   pixel_weights);
+                                                   tolerance);
   };
   const std::size_t n = depth.pred.size();
   auto value_and_check = [&](const std::string& name) {
@@ -77,9 +77,12 @@ TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
     gslam::test::expect_gradients_match(name + " d/dA", g_alpha, [&](std::size_t i, double d) { alpha[i] += d; }, value);
   };
   value_and_check("silhouette_depth");
-  std::uniform_real_distribution<double> positive(0.1, 2.0);
-  for (std::size_t p = 0; p < n; ++p) pixel_weights.push_back(positive(rng));
-  value_and_check("silhouette_depth weighted");
+  // Bands a quarter of each |residual| (above) or twice it (below): both sides, kept clear of the kink.
+  for (std::size_t p = 0; p < n; ++p) {
+    const double a = alpha[p], pred = a > kThreshold ? depth.pred[p] / a : depth.pred[p];
+    tolerance.push_back(std::abs(pred - depth.target[p]) * (p % 2 == 0 ? 0.25 : 2.0));
+  }
+  value_and_check("silhouette_depth with tolerance");
   // Known value: normalized above the threshold, raw below; unmeasured pixels ignored.
   const std::vector<float> d = {1.0f, 1.0f, 2.0f}, a = {0.5f, 0.95f, 1.0f}, t = {0.8f, 1.0f, 0.f};
   std::vector<float> gd(3, 0.f), ga(3, 0.f);
@@ -87,10 +90,13 @@ TEST(Losses, SilhouetteDepthGradientsMatchFiniteDifferences) {
   EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga), expected, 1e-6);
   EXPECT_EQ(ga[0], 0.f) << "below the threshold alpha gets no gradient";
   EXPECT_EQ(gd[2], 0.f) << "no measurement, no gradient";
-  // Per-pixel weights scale each residual; the mean still divides by the measured pixels.
-  const std::vector<float> w = {2.0f, 0.5f, 7.0f};
-  const double weighted = (2.0 * std::abs(1.0 - 0.8) + 0.5 * std::abs(1.0 / 0.95 - 1.0)) / 2;
-  EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga, 1.0, w), weighted, 1e-6);
+  // Residuals inside the band cost nothing and get no gradient; the mean still divides by the
+  // measured pixels.
+  const std::vector<float> band = {0.05f, 0.1f, 7.0f};
+  std::fill(gd.begin(), gd.end(), 0.f);
+  EXPECT_NEAR(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga, 1.0, band), (0.2 - 0.05) / 2, 1e-6);
+  EXPECT_EQ(gd[1], 0.f) << "a residual of 0.053 inside a band of 0.1";
+  EXPECT_GT(gd[0], 0.f);
   EXPECT_THROW(splat::silhouette_depth_l1_loss<float>(d, a, t, kThreshold, gd, ga, 1.0, std::vector<float>(2, 1.f)),
                splat::Error);
 }

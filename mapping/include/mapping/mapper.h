@@ -22,9 +22,9 @@ struct MapperConfig {
   double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
   // The depth weight in the final refinement, where the map is tuned to render the frames.
   double refine_depth_weight = 1.0;
-  // Each pixel's depth residual is weighted by (1 m / measured depth)^falloff: a depth camera's
-  // noise grows with distance (as z^2 for the Kinect), and far noise fought the colour.
-  double depth_falloff = 0, refine_depth_falloff = 0;
+  // Depth residuals within +-tolerance x z^2 (z the measured depth in metres) cost nothing: a
+  // structured-light camera's noise grows as z^2, and fitting far noise fought the colour.
+  double depth_tolerance = 0, refine_depth_tolerance = 0;
   // Depth is compared as D/A where the rendered silhouette A exceeds this, as D elsewhere
   // (splat::silhouette_depth_l1_loss). Synthetic room, 30 frames, keyframe poses refined:
   // ATE 0.54 cm comparing D everywhere, 0.31 cm with this.
@@ -88,14 +88,16 @@ class Mapper {
   // over a window of covisible keyframes and prunes. The first keyframe seeds the map.
   MappingStats add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
 
-  // Final refinement: `iterations` Adam steps of the map on one earlier frame (at
-  // refine_resolution_factor), which the bounded keyframe store may have dropped. Sweeping every frame this
-  // way undoes what later windows did to regions they saw poorly. With `densify`, Gaussians are
-  // first added where the frame sees what the map lacks (as for a keyframe); no pruning.
+  // Final refinement: `iterations` Adam steps of the map on one earlier frame, which the bounded
+  // keyframe store may have dropped, given as refinement_frame() made it. Sweeping every frame
+  // this way undoes what later windows did to regions they saw poorly. With `densify`, Gaussians
+  // are first added where the frame sees what the map lacks (as for a keyframe); no pruning.
   // Where `pose` is given (and refine_pose_rate_scale > 0) the frame's pose moves with the map,
   // with that Adam state; otherwise it stays.
-  double refine(const splat::RgbdFrame& frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose, int iterations,
-                bool densify = false);
+  double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
+                int iterations, bool densify = false);
+  // An input frame as refine() takes it: at refine_resolution_factor.
+  splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
   // Removes transparent and oversized Gaussians; returns how many.
   std::size_t prune();
 
