@@ -223,4 +223,33 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   EXPECT_GT(after, before + 0.5);
 }
 
+// The sweep keeps frames in memory within refine_cache_mib: each is loaded once instead of once
+// per pass, and the result is the same as reloading them.
+TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 4);
+  auto rasterizer = splat::make_cpu_rasterizer({1});
+  auto refine = [&](double cache_mib, std::size_t& loads) {
+    app::SlamConfig config;
+    config.refine_passes = 3;
+    config.refine_cache_mib = cache_mib;
+    app::SlamSystem slam(*rasterizer, config);
+    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+    loads = 0;
+    const app::SlamSystem::Refinement r = slam.refine_map(records, [&](std::size_t i) {
+      ++loads;
+      return dataset.load(i);
+    });
+    return std::make_pair(r.T_world_cam, slam.map().means);
+  };
+  std::size_t cached_loads = 0, reloads = 0;
+  const auto cached = refine(app::SlamConfig{}.refine_cache_mib, cached_loads);
+  const auto reloaded = refine(0, reloads);
+  EXPECT_EQ(cached_loads, dataset.entries.size());
+  EXPECT_EQ(reloads, 3 * dataset.entries.size());
+  ASSERT_EQ(cached.first.size(), reloaded.first.size());
+  for (std::size_t i = 0; i < cached.first.size(); ++i) EXPECT_TRUE(cached.first[i].isApprox(reloaded.first[i], 0)) << i;
+  EXPECT_EQ(cached.second, reloaded.second);
+}
+
 }  // namespace
