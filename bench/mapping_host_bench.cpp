@@ -9,7 +9,6 @@
 #include "mapping/gaussian_adam.h"
 #include "splat/losses.h"
 #include "splat/rasterizer.h"
-#include "splat/thread_pool.h"
 
 namespace {
 
@@ -35,16 +34,6 @@ void dssim(benchmark::State& state) {
   Images im = random_images(width, height);
   for (auto _ : state) {
     benchmark::DoNotOptimize(splat::dssim_loss<float>(im.pred, im.target, width, height, 3, im.grad, 0.2));
-  }
-}
-
-// The same on a pool of all cores, as Mapper runs it.
-void dssim_threaded(benchmark::State& state) {
-  const int width = int(state.range(0)), height = int(state.range(1));
-  Images im = random_images(width, height);
-  splat::ThreadPool pool;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(splat::dssim_loss<float>(im.pred, im.target, width, height, 3, im.grad, 0.2, &pool));
   }
 }
 
@@ -81,7 +70,6 @@ void sizes(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 BENCHMARK(dssim)->Apply(sizes);
-BENCHMARK(dssim_threaded)->Apply(sizes);
 BENCHMARK(l1)->Apply(sizes);
 BENCHMARK(adam_step)->Arg(55000)->Arg(200000)->Unit(benchmark::kMillisecond);
 

@@ -69,8 +69,7 @@ struct Shared {
 
 int run_live(const LiveOptions& o) {
   if (!(o.checkpoint_seconds > 0)) throw splat::Error("--checkpoint-seconds must be > 0");
-  SlamConfig config = load_slam_config(o.config);
-  config.mapping.threads = o.backend.threads;  // the losses share --threads with the CPU rasterizer
+  const SlamConfig config = load_slam_config(o.config);
   // The dataset is opened (and checked) first; the replay clock starts once everything else is
   // ready, so start-up time does not count as dropped frames.
   std::optional<Dataset> dataset;

@@ -20,8 +20,7 @@ int run_reconstruct(const ReconstructOptions& o) {
     write_synthetic_sequence(input, SyntheticOptions{});
   }
   const Dataset dataset = open_dataset(input, o.dataset_options);
-  SlamConfig config = load_slam_config(o.config);
-  config.mapping.threads = o.backend.threads;  // the losses share --threads with the CPU rasterizer
+  const SlamConfig config = load_slam_config(o.config);
   std::fprintf(stderr, "dataset %s (%s): %zu frames at %dx%d%s", input.c_str(), dataset.format.c_str(),
                dataset.entries.size(), dataset.intrinsics.width, dataset.intrinsics.height,
                dataset.has_ground_truth() ? ", with ground truth" : "");

@@ -30,7 +30,6 @@ void MapperConfig::validate() const {
   if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
   if (!(depth_tolerance >= 0 && refine_depth_tolerance >= 0)) fail("depth tolerances must be >= 0");
   if (refine_depth_edge_radius < 0) fail("refine_depth_edge_radius must be >= 0");
-  if (threads < 0) fail("threads must be >= 0");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -38,7 +37,7 @@ void MapperConfig::validate() const {
 }
 
 Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)
-    : rasterizer_(rasterizer), config_(config), pool_(config.threads), adam_(config.adam), rng_(config.random_seed) {
+    : rasterizer_(rasterizer), config_(config), adam_(config.adam), rng_(config.random_seed) {
   config_.validate();
   map_.sh_degree = config_.seed.sh_degree;
 }
@@ -147,7 +146,7 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   const std::vector<float>& colour = vignetted ? recorded : render.rgb;
   double loss = splat::l1_loss<float>(colour, f.rgb, 3, {}, d.rgb, config_.color_weight);
   if (config_.ssim_weight > 0) {
-    loss += splat::dssim_loss<float>(colour, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight, &pool_);
+    loss += splat::dssim_loss<float>(colour, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
   if (vignetted) {
     const std::array<double, 2> d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);

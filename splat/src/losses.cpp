@@ -2,12 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "splat/error.h"
-#include "splat/thread_pool.h"
 
 namespace splat {
 namespace {
@@ -80,64 +78,33 @@ struct Window {
   }
 };
 
-// Runs fn(first_row, end_row) over blocks of rows, on `pool` where given. Blocks write disjoint
-// rows, so results do not depend on the thread count.
-constexpr int kRowBlock = 16;
-std::size_t row_blocks(int height) { return static_cast<std::size_t>((height + kRowBlock - 1) / kRowBlock); }
-void for_row_blocks(ThreadPool* pool, int height, const std::function<void(int, int)>& fn) {
-  auto block = [&](std::size_t b) {
-    const int y0 = static_cast<int>(b) * kRowBlock;
-    fn(y0, std::min(height, y0 + kRowBlock));
-  };
-  if (pool) {
-    pool->parallel_for(row_blocks(height), block);
-  } else {
-    for (std::size_t b = 0; b < row_blocks(height); ++b) block(b);
-  }
-}
-
-// Blurs each ins[k] into outs[k] (overwritten); `tmps` holds one scratch image per input.
+// `tmp` is scratch of the image's size; `out` is overwritten.
 template <typename A>
-void blur(const std::vector<const std::vector<A>*>& ins, const std::vector<std::vector<A>*>& outs,
-          std::vector<std::vector<A>>& tmps, int width, int height, ThreadPool* pool) {
+void blur(const std::vector<A>& in, std::vector<A>& out, std::vector<A>& tmp, int width, int height) {
   static const Window<A> window;
-  const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  tmps.resize(ins.size());
-  for (std::size_t k = 0; k < ins.size(); ++k) {
-    tmps[k].resize(pixels);
-    outs[k]->resize(pixels);
-  }
+  tmp.assign(in.size(), A(0));
+  out.assign(in.size(), A(0));
   // Horizontal: tap by tap over the pixels it reaches (taps outside the row are zero padding),
   // so the pixel loop vectorizes; each pixel still sums its taps in order.
-  for_row_blocks(pool, height, [&](int y0, int y1) {
-    for (std::size_t m = 0; m < ins.size(); ++m) {
-      for (int y = y0; y < y1; ++y) {
-        const A* row = &(*ins[m])[std::size_t(y) * width];
-        A* dst = &tmps[m][std::size_t(y) * width];
-        std::fill(dst, dst + width, A(0));
-        for (int k = -kRadius; k <= kRadius; ++k) {
-          const A w = window.w[k + kRadius];
-          for (int x = std::max(0, -k); x < std::min(width, width - k); ++x) dst[x] += w * row[x + k];
-        }
-      }
+  for (int y = 0; y < height; ++y) {
+    const A* row = &in[std::size_t(y) * width];
+    A* dst = &tmp[std::size_t(y) * width];
+    for (int k = -kRadius; k <= kRadius; ++k) {
+      const A w = window.w[k + kRadius];
+      for (int x = std::max(0, -k); x < std::min(width, width - k); ++x) dst[x] += w * row[x + k];
     }
-  });
+  }
   // Vertical: the same, whole rows at a time.
-  for_row_blocks(pool, height, [&](int y0, int y1) {
-    for (std::size_t m = 0; m < ins.size(); ++m) {
-      for (int y = y0; y < y1; ++y) {
-        A* dst = &(*outs[m])[std::size_t(y) * width];
-        std::fill(dst, dst + width, A(0));
-        for (int k = -kRadius; k <= kRadius; ++k) {
-          const int yy = y + k;
-          if (yy < 0 || yy >= height) continue;
-          const A w = window.w[k + kRadius];
-          const A* src = &tmps[m][std::size_t(yy) * width];
-          for (int x = 0; x < width; ++x) dst[x] += w * src[x];
-        }
-      }
+  for (int y = 0; y < height; ++y) {
+    A* dst = &out[std::size_t(y) * width];
+    for (int k = -kRadius; k <= kRadius; ++k) {
+      const int yy = y + k;
+      if (yy < 0 || yy >= height) continue;
+      const A w = window.w[k + kRadius];
+      const A* src = &tmp[std::size_t(yy) * width];
+      for (int x = 0; x < width; ++x) dst[x] += w * src[x];
     }
-  });
+  }
 }
 
 }  // namespace
@@ -195,57 +162,49 @@ double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alp
 
 template <typename T>
 double dssim_loss(std::span<const T> pred, std::span<const T> target, int width, int height,
-                  int channels, std::span<T> grad, double weight, ThreadPool* pool) {
+                  int channels, std::span<T> grad, double weight) {
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
   if (width < 1 || height < 1 || channels < 1) throw Error("dssim_loss: empty image");
   check_sizes<T>("dssim_loss", pred.size(), target.size(), grad.size(), 0, pixels);
   if (pred.size() != pixels * channels) throw Error("dssim_loss: image size does not match " + std::to_string(width) + "x" + std::to_string(height));
   constexpr T kC1 = T(0.01 * 0.01), kC2 = T(0.03 * 0.03);
   const T scale = static_cast<T>(weight / static_cast<double>(pixels * channels));
-  // SSIM summed per row block, then over blocks in order: the same sum on any thread count.
-  std::vector<double> block_ssim(row_blocks(height), 0.0);
-  std::vector<T> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels);
-  std::vector<T> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
-  std::vector<std::vector<T>> tmps;
-  for (int c = 0; c < channels; ++c) {
-    for_row_blocks(pool, height, [&](int y0, int y1) {
-      for (std::size_t p = std::size_t(y0) * width; p < std::size_t(y1) * width; ++p) {
-        x[p] = pred[p * channels + c];
-        y[p] = target[p * channels + c];
-        xx[p] = x[p] * x[p];
-        yy[p] = y[p] * y[p];
-        xy[p] = x[p] * y[p];
-      }
-    });
-    blur<T>({&x, &y, &xx, &yy, &xy}, {&mx, &my, &exx, &eyy, &exy}, tmps, width, height, pool);
-    for_row_blocks(pool, height, [&](int y0, int y1) {
-      double sum = 0;
-      for (std::size_t p = std::size_t(y0) * width; p < std::size_t(y1) * width; ++p) {
-        const T a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
-        const T b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
-        const T b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
-        const T inv_b = 1 / (b1 * b2);
-        const T s = a1 * a2 * inv_b;
-        sum += s;
-        // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale. Written
-        // without dividing by a1 or a2: a2 (twice the covariance plus C2) can be exactly 0, and
-        // s / a2 as s * (1 / a2) is then 0 * inf.
-        da[p] = -scale * (2 * my[p] * (a2 - a1) * inv_b + s * (2 * mx[p] / b2 - 2 * mx[p] / b1));
-        db[p] = -scale * s * (-1 / b2);
-        dc[p] = -scale * 2 * a1 * inv_b;
-      }
-      block_ssim[static_cast<std::size_t>(y0 / kRowBlock)] += sum;
-    });
-    // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
-    blur<T>({&da, &db, &dc}, {&ga, &gb, &gc}, tmps, width, height, pool);
-    for_row_blocks(pool, height, [&](int y0, int y1) {
-      for (std::size_t p = std::size_t(y0) * width; p < std::size_t(y1) * width; ++p) {
-        grad[p * channels + c] += ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p];
-      }
-    });
-  }
   double ssim_sum = 0;
-  for (double b : block_ssim) ssim_sum += b;
+  std::vector<T> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels), tmp;
+  std::vector<T> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
+  for (int c = 0; c < channels; ++c) {
+    for (std::size_t p = 0; p < pixels; ++p) {
+      x[p] = pred[p * channels + c];
+      y[p] = target[p * channels + c];
+      xx[p] = x[p] * x[p];
+      yy[p] = y[p] * y[p];
+      xy[p] = x[p] * y[p];
+    }
+    blur(x, mx, tmp, width, height);
+    blur(y, my, tmp, width, height);
+    blur(xx, exx, tmp, width, height);
+    blur(yy, eyy, tmp, width, height);
+    blur(xy, exy, tmp, width, height);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const T a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
+      const T b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
+      const T b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
+      const T inv_b = 1 / (b1 * b2);
+      const T s = a1 * a2 * inv_b;
+      ssim_sum += s;
+      // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale. Written
+      // without dividing by a1 or a2: a2 (twice the covariance plus C2) can be exactly 0, and
+      // s / a2 as s * (1 / a2) is then 0 * inf.
+      da[p] = -scale * (2 * my[p] * (a2 - a1) * inv_b + s * (2 * mx[p] / b2 - 2 * mx[p] / b1));
+      db[p] = -scale * s * (-1 / b2);
+      dc[p] = -scale * 2 * a1 * inv_b;
+    }
+    // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
+    blur(da, ga, tmp, width, height);
+    blur(db, gb, tmp, width, height);
+    blur(dc, gc, tmp, width, height);
+    for (std::size_t p = 0; p < pixels; ++p) grad[p * channels + c] += ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p];
+  }
   return weight * (1 - ssim_sum / static_cast<double>(pixels * channels));
 }
 
@@ -273,7 +232,7 @@ double psnr(std::span<const float> pred, std::span<const float> target, int chan
                                            std::span<const T>, double, std::span<T>, std::span<T>, \
                                            double, std::span<const T>);                          \
   template double dssim_loss(std::span<const T>, std::span<const T>, int, int, int, std::span<T>, \
-                             double, ThreadPool*);                                                \
+                             double);                                                             \
   template void alpha_mask(std::span<const T>, T, std::span<T>);
 GSLAM_INSTANTIATE(float)
 GSLAM_INSTANTIATE(double)

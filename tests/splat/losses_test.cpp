@@ -7,7 +7,6 @@
 
 #include "splat/error.h"
 #include "splat/losses.h"
-#include "splat/thread_pool.h"
 #include "support/expect_error.h"
 #include "support/gradient_check.h"
 
@@ -143,22 +142,6 @@ TEST(Losses, FloatDssimAgreesWithDouble) {
   for (std::size_t i = 0; i < grad.size(); ++i) {
     ASSERT_NEAR(grad_f[i], grad[i], 1e-4 * largest) << "element " << i;
   }
-}
-
-// Rows shared among threads give the same loss and gradient, bit for bit; 37 rows leave the
-// last block of rows short.
-TEST(Losses, DssimIsTheSameOnAnyNumberOfThreads) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  const int w = 50, h = 37;
-  std::vector<float> pred(std::size_t(w) * h * 3), target(pred.size());
-  for (std::size_t i = 0; i < pred.size(); ++i) pred[i] = u(rng), target[i] = u(rng);
-  std::vector<float> alone(pred.size(), 0.f), shared(pred.size(), 0.f);
-  splat::ThreadPool pool(3);
-  const double a = splat::dssim_loss<float>(pred, target, w, h, 3, alone, 0.2);
-  const double b = splat::dssim_loss<float>(pred, target, w, h, 3, shared, 0.2, &pool);
-  EXPECT_EQ(a, b);
-  EXPECT_EQ(alone, shared);
 }
 
 TEST(Losses, RejectMismatchedSizes) {

@@ -10,7 +10,6 @@
 #include "mapping/vignetting.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
-#include "splat/thread_pool.h"
 
 namespace mapping {
 
@@ -66,7 +65,6 @@ struct MapperConfig {
   // frame. 0 keeps every keyframe where tracking put it.
   double pose_learning_rate = 0, pose_rotation_learning_rate = 0;
   uint32_t random_seed = 1;
-  int threads = 0;  // host threads for the image losses (D-SSIM); 0 = all cores
   void validate() const;
 };
 
@@ -136,7 +134,6 @@ class Mapper {
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
-  splat::ThreadPool pool_;  // for the losses
   splat::Gaussians map_;
   GaussianAdam adam_;
   std::deque<Keyframe> keyframes_;
