@@ -2,9 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
-#include "mapping/depth_edges.h"
 #include "mapping/depth_holes.h"
 #include "splat/adam.h"
 #include "splat/error.h"
@@ -12,10 +10,6 @@
 #include "splat/se3.h"
 
 namespace mapping {
-
-namespace {
-constexpr double kDepthEdgeJump = 0.1;  // depth_edges: a 10% jump between neighbours
-}  // namespace
 
 void MapperConfig::validate() const {
   auto fail = [](const std::string& what) { throw splat::Error("MapperConfig: " + what); };
@@ -29,7 +23,6 @@ void MapperConfig::validate() const {
   if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
   if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
   if (!(depth_tolerance >= 0 && refine_depth_tolerance >= 0)) fail("depth tolerances must be >= 0");
-  if (refine_depth_edge_radius < 0) fail("refine_depth_edge_radius must be >= 0");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -155,17 +148,10 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
   const double tolerance = step == Step::kWindow ? config_.depth_tolerance : config_.refine_depth_tolerance;
-  const int edge_radius = step == Step::kWindow ? 0 : config_.refine_depth_edge_radius;
   std::vector<float> depth_band;
-  if (tolerance > 0 || edge_radius > 0) {
+  if (tolerance > 0) {
     depth_band.resize(f.depth.size());
     for (std::size_t p = 0; p < f.depth.size(); ++p) depth_band[p] = static_cast<float>(tolerance) * f.depth[p] * f.depth[p];
-  }
-  if (edge_radius > 0) {
-    const std::vector<uint8_t> edges = depth_edges(f.depth, f.width(), f.height(), kDepthEdgeJump, edge_radius);
-    for (std::size_t p = 0; p < edges.size(); ++p) {
-      if (edges[p]) depth_band[p] = std::numeric_limits<float>::infinity();
-    }
   }
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
                                                  step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight,

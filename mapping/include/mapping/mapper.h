@@ -25,9 +25,6 @@ struct MapperConfig {
   // Depth residuals within +-tolerance x z^2 (z the measured depth in metres) cost nothing: a
   // structured-light camera's noise grows as z^2, and fitting far noise fought the colour.
   double depth_tolerance = 0, refine_depth_tolerance = 0;
-  // In the final refinement, pixels within this many pixels of a depth edge (depth_edges, a jump
-  // of over 10%) have no depth loss: there depth and colour disagree the most. 0 keeps them.
-  int refine_depth_edge_radius = 0;
   // Depth is compared as D/A where the rendered silhouette A exceeds this, as D elsewhere
   // (splat::silhouette_depth_l1_loss). Synthetic room, 30 frames, keyframe poses refined:
   // ATE 0.54 cm comparing D everywhere, 0.31 cm with this.
