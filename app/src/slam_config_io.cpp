@@ -52,8 +52,6 @@ SlamConfig load_slam_config(const std::filesystem::path& path) {
       get(m, "ssim_weight", c.mapping.ssim_weight);
       get(m, "depth_weight", c.mapping.depth_weight);
       get(m, "refine_depth_weight", c.mapping.refine_depth_weight);
-      get(m, "depth_tolerance", c.mapping.depth_tolerance);
-      get(m, "refine_depth_tolerance", c.mapping.refine_depth_tolerance);
       get(m, "densify_alpha", c.mapping.densify_alpha);
       get(m, "refine_seed_depth_holes", c.mapping.refine_seed_depth_holes);
       get(m, "prune_max_scale", c.mapping.prune_max_scale);

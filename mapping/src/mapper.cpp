@@ -22,7 +22,6 @@ void MapperConfig::validate() const {
   if (!(densify_alpha >= 0 && densify_alpha <= 1)) fail("densify_alpha must be in [0, 1]");
   if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
   if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
-  if (!(depth_tolerance >= 0 && refine_depth_tolerance >= 0)) fail("depth tolerances must be >= 0");
   for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
     if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
   }
@@ -147,15 +146,8 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   }
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
-  const double tolerance = step == Step::kWindow ? config_.depth_tolerance : config_.refine_depth_tolerance;
-  std::vector<float> depth_band;
-  if (tolerance > 0) {
-    depth_band.resize(f.depth.size());
-    for (std::size_t p = 0; p < f.depth.size(); ++p) depth_band[p] = static_cast<float>(tolerance) * f.depth[p] * f.depth[p];
-  }
   loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
-                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight,
-                                                 depth_band);
+                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);

@@ -133,11 +133,10 @@ double depth_l1_loss(std::span<const T> pred, std::span<const T> target, std::sp
 template <typename T>
 double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alpha,
                                 std::span<const T> target, double alpha_threshold,
-                                std::span<T> grad_depth, std::span<T> grad_alpha, double weight,
-                                std::span<const T> tolerance) {
+                                std::span<T> grad_depth, std::span<T> grad_alpha, double weight) {
   const char* name = "silhouette_depth_l1_loss";
   check_sizes<T>(name, depth.size(), target.size(), grad_depth.size(), alpha.size(), depth.size());
-  check_sizes<T>(name, depth.size(), target.size(), grad_alpha.size(), tolerance.size(), depth.size());
+  check_sizes<T>(name, depth.size(), target.size(), grad_alpha.size(), 0, depth.size());
   const std::size_t count = static_cast<std::size_t>(std::count_if(target.begin(), target.end(), [](T t) { return t > 0; }));
   if (count == 0) return 0;
   const double scale = weight / static_cast<double>(count);
@@ -146,10 +145,8 @@ double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alp
     if (!(target[p] > 0)) continue;
     const bool normalized = alpha[p] > alpha_threshold;
     const double a = alpha[p], pred = normalized ? depth[p] / a : depth[p];
-    const double r = pred - target[p], band = tolerance.empty() ? 0.0 : tolerance[p];
-    if (std::abs(r) <= band) continue;
-    const double g = scale * sign(r);
-    sum += std::abs(r) - band;
+    const double r = pred - target[p], g = scale * sign(r);
+    sum += std::abs(r);
     if (normalized) {  // d(D/A)/dD = 1/A, d(D/A)/dA = -(D/A)/A
       grad_depth[p] += static_cast<T>(g / a);
       grad_alpha[p] -= static_cast<T>(g * pred / a);
@@ -230,7 +227,7 @@ double psnr(std::span<const float> pred, std::span<const float> target, int chan
                                 std::span<T>, double);                                            \
   template double silhouette_depth_l1_loss(std::span<const T>, std::span<const T>,              \
                                            std::span<const T>, double, std::span<T>, std::span<T>, \
-                                           double, std::span<const T>);                          \
+                                           double);                                              \
   template double dssim_loss(std::span<const T>, std::span<const T>, int, int, int, std::span<T>, \
                              double);                                                             \
   template void alpha_mask(std::span<const T>, T, std::span<T>);

@@ -20,14 +20,11 @@ TEST(SlamConfigFile, SetsTheRefinementAndSeedingKeys) {
   gslam::test::TempDir dir;
   const app::SlamConfig c = app::load_slam_config(write_config(
       dir, R"({"refine_passes": 3, "refine_densify_passes": 2, "refine_cache_mib": 64, "tracking": {"min_step_translation": 1e-4, "min_step_rotation": 2e-4}, "mapping": {"refine_depth_weight": 0.25, "refine_vignetting_rate": 0.01,
-              "sh_degree": 1, "seed_scale_factor": 0.8, "ssim_weight": 0.2, "refine_seed_depth_holes": true,
-              "refine_depth_tolerance": 0.004, "depth_tolerance": 0.001}})"));
+              "sh_degree": 1, "seed_scale_factor": 0.8, "ssim_weight": 0.2, "refine_seed_depth_holes": true}})"));
   EXPECT_EQ(c.refine_passes, 3);
   EXPECT_EQ(c.refine_densify_passes, 2);
   EXPECT_EQ(c.refine_cache_mib, 64);
   EXPECT_TRUE(c.mapping.refine_seed_depth_holes);
-  EXPECT_EQ(c.mapping.refine_depth_tolerance, 0.004);
-  EXPECT_EQ(c.mapping.depth_tolerance, 0.001);
   EXPECT_EQ(c.tracking.min_step_translation, 1e-4);
   EXPECT_EQ(c.tracking.min_step_rotation, 2e-4);
   EXPECT_EQ(c.mapping.refine_depth_weight, 0.25);
@@ -47,7 +44,6 @@ TEST(SlamConfigFile, RefusesOutOfRangeValuesNamingThem) {
       {R"({"mapping": {"seed_scale_factor": 0}})", "seed scale_factor must be positive"},
       {R"({"tracking": {"min_step_rotation": -1}})", "min_step_translation and min_step_rotation must be >= 0"},
       {R"({"refine_cache_mib": -1})", "refine_cache_mib must be >= 0"},
-      {R"({"mapping": {"refine_depth_tolerance": -0.1}})", "depth tolerances must be >= 0"},
   };
   for (const auto& [json, message] : cases) {
     try {

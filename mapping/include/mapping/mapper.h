@@ -22,9 +22,6 @@ struct MapperConfig {
   double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
   // The depth weight in the final refinement, where the map is tuned to render the frames.
   double refine_depth_weight = 1.0;
-  // Depth residuals within +-tolerance x z^2 (z the measured depth in metres) cost nothing: a
-  // structured-light camera's noise grows as z^2, and fitting far noise fought the colour.
-  double depth_tolerance = 0, refine_depth_tolerance = 0;
   // Depth is compared as D/A where the rendered silhouette A exceeds this, as D elsewhere
   // (splat::silhouette_depth_l1_loss). Synthetic room, 30 frames, keyframe poses refined:
   // ATE 0.54 cm comparing D everywhere, 0.31 cm with this.

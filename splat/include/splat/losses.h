@@ -29,13 +29,11 @@ double depth_l1_loss(std::span<const T> pred, std::span<const T> target, std::sp
 // alpha-weighted D elsewhere. D reads short wherever A < 1, a bias that pulls camera poses
 // along their axis; D / A has none, while D on thin silhouettes still grows coverage.
 // Adds the gradients with respect to D (ForwardResult::depth) and A to grad_depth, grad_alpha.
-// With `tolerance`, residuals within +-tolerance[p] cost nothing and larger ones count beyond it
-// (|r| - tolerance): a sensor's noise band, inside which a residual says nothing.
 template <typename T>
 double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alpha,
                                 std::span<const T> target, double alpha_threshold,
                                 std::span<T> grad_depth, std::span<T> grad_alpha,
-                                double weight = 1.0, std::span<const T> tolerance = {});
+                                double weight = 1.0);
 
 // 1 - SSIM, SSIM averaged over pixels and channels, with an 11x11 Gaussian window (sigma 1.5),
 // zero padding at the borders and C1 = 0.01^2, C2 = 0.03^2 (the 3DGS training loss).
