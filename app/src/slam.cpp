@@ -162,16 +162,15 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::vector<FrameRecord>& re
   std::size_t done = 0;
   // Frames kept in memory (bounded by refine_cache_mib), the others reloaded on each visit.
   std::vector<std::optional<splat::RgbdFrame>> cache(records.size());
+  splat::RgbdFrame uncached;
   double cached_mib = 0;
-  auto frame_at = [&](std::size_t i) -> splat::RgbdFrame {
+  auto frame_at = [&](std::size_t i) -> const splat::RgbdFrame& {
     if (cache[i]) return *cache[i];
     splat::RgbdFrame f = mapper_.refinement_frame(load(i));
     const double mib = static_cast<double>((f.rgb.size() + f.depth.size()) * sizeof(float)) / (1 << 20);
-    if (cached_mib + mib <= config_.refine_cache_mib) {
-      cached_mib += mib;
-      cache[i] = f;
-    }
-    return f;
+    if (cached_mib + mib > config_.refine_cache_mib) return uncached = std::move(f);
+    cached_mib += mib;
+    return *(cache[i] = std::move(f));
   };
   for (int pass = 0; pass < config_.refine_passes; ++pass) {
     std::shuffle(order.begin(), order.end(), rng);
