@@ -54,14 +54,12 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
       mask[p] = uncovered || in_front ? 1.f : 0.f;
     }
   }
-  std::size_t added = 0;
+  splat::RgbdFrame filled;
   if (fill_holes) {
-    splat::RgbdFrame filled = f;
+    filled = f;
     filled.depth = fill_depth_holes(f.depth, f.width(), f.height());
-    added = seed_from_depth(filled, T_cam_world.inverse(), config_.seed, map_, mask);
-  } else {
-    added = seed_from_depth(f, T_cam_world.inverse(), config_.seed, map_, mask);
   }
+  const std::size_t added = seed_from_depth(fill_holes ? filled : f, T_cam_world.inverse(), config_.seed, map_, mask);
   adam_.append(added, map_.sh_degree);
   return added;
 }
