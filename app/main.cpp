@@ -2,7 +2,7 @@
 #include <cstdio>
 #include <exception>
 
-#include "app/cli.h"
+#include "commands/cli.h"
 
 int main(int argc, char** argv) {
   try {

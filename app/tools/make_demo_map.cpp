@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <random>
 
-#include "app/ply_io.h"
+#include "io/ply_io.h"
 
 namespace {
 

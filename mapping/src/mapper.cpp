@@ -6,26 +6,38 @@
 #include "mapping/depth_holes.h"
 #include "splat/adam.h"
 #include "splat/error.h"
+#include "splat/field_check.h"
 #include "splat/losses.h"
 #include "splat/se3.h"
 
 namespace mapping {
 
-void MapperConfig::validate() const {
-  auto fail = [](const std::string& what) { throw splat::Error("MapperConfig: " + what); };
-  if (resolution_factor < 1 || refine_resolution_factor < 1) fail("resolution factors must be >= 1");
-  if (iterations < 0 || window < 1 || max_keyframes < 1) fail("iterations >= 0, window >= 1, max_keyframes >= 1");
-  if (!(prune_max_scale > 0)) fail("prune_max_scale must be positive");
-  if (!(seed.scale_factor > 0) || seed.stride < 1) fail("seed scale_factor must be positive and stride >= 1");
-  if (seed.sh_degree < 0 || seed.sh_degree > 3) fail("sh_degree must be 0 to 3");
-  if (!(color_weight >= 0 && ssim_weight >= 0 && depth_weight >= 0 && refine_depth_weight >= 0)) fail("loss weights must be >= 0");
-  if (!(densify_alpha >= 0 && densify_alpha <= 1)) fail("densify_alpha must be in [0, 1]");
-  if (!(refine_learning_rate_scale > 0)) fail("refine_learning_rate_scale must be positive");
-  if (!(refine_vignetting_rate >= 0)) fail("refine_vignetting_rate must be >= 0");
-  for (double t : {depth_alpha_threshold, refine_depth_alpha_threshold}) {
-    if (!(t >= 0 && t <= 1)) fail("depth_alpha_threshold and refine_depth_alpha_threshold must be in [0, 1]");
-  }
-  if (!(pose_learning_rate >= 0 && pose_rotation_learning_rate >= 0)) fail("pose learning rates must be >= 0");
+void MapperConfig::validate(const std::string& prefix) const {
+  const splat::FieldCheck check(prefix);
+  check.at_least("resolution_factor", resolution_factor, 1);
+  check.at_least("refine_resolution_factor", refine_resolution_factor, 1);
+  check.at_least("iterations", iterations, 0);
+  check.at_least("window", window, 1);
+  check.at_least("max_keyframes", max_keyframes, std::size_t{1});
+  check.at_least("color_weight", color_weight, 0.0);
+  check.at_least("ssim_weight", ssim_weight, 0.0);
+  check.at_least("depth_weight", depth_weight, 0.0);
+  check.at_least("refine_depth_weight", refine_depth_weight, 0.0);
+  check.in_range("depth_alpha_threshold", depth_alpha_threshold, 0.0, 1.0);
+  check.in_range("refine_depth_alpha_threshold", refine_depth_alpha_threshold, 0.0, 1.0);
+  check.positive("refine_learning_rate_scale", refine_learning_rate_scale);
+  check.at_least("refine_pose_rate_scale", refine_pose_rate_scale, 0.0);
+  check.at_least("refine_vignetting_rate", refine_vignetting_rate, 0.0);
+  check.in_range("densify_alpha", densify_alpha, 0.0, 1.0);
+  check.positive("depth_error_factor", depth_error_factor);
+  check.at_least("seed_stride", seed.stride, 1);
+  check.in_range("seed_opacity", seed.opacity, 1e-6, 1.0 - 1e-6);
+  check.positive("seed_scale_factor", seed.scale_factor);
+  check.in_range("sh_degree", seed.sh_degree, 0, 3);
+  check.in_range("prune_opacity", prune_opacity, 0.0, 1.0 - 1e-6);
+  check.positive("prune_max_scale", prune_max_scale);
+  check.at_least("pose_learning_rate", pose_learning_rate, 0.0);
+  check.at_least("pose_rotation_learning_rate", pose_rotation_learning_rate, 0.0);
 }
 
 Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)

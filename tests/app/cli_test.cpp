@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "app/image_io.h"
-#include "app/ply_io.h"
+#include "io/image_io.h"
+#include "io/ply_io.h"
 #include "app/run_gslam.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"

@@ -3,10 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include "app/dataset.h"
-#include "app/evaluation.h"
-#include "app/image_io.h"
-#include "app/synthetic_sequence.h"
+#include "datasets/dataset.h"
+#include "commands/evaluation.h"
+#include "io/image_io.h"
+#include "datasets/synthetic_sequence.h"
 #include "splat/se3.h"
 #include "support/expect_error.h"
 #include "support/temp_dir.h"

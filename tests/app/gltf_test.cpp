@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/gltf_io.h"
+#include "io/gltf_io.h"
 #include "support/expect_error.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"

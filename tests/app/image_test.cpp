@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/image_io.h"
+#include "io/image_io.h"
 #include "support/expect_error.h"
 #include "support/temp_dir.h"
 

@@ -5,11 +5,11 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "app/image_io.h"
-#include "app/live_view.h"
+#include "io/image_io.h"
+#include "viewer/live_view.h"
 #include "app/run_gslam.h"
-#include "app/synthetic_sequence.h"
-#include "app/trajectory.h"
+#include "datasets/synthetic_sequence.h"
+#include "io/trajectory.h"
 #include "splat/vulkan_rasterizer.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"

@@ -1,7 +1,7 @@
 // Plots: round tick values, and that labels and series land where the axes say.
 #include <gtest/gtest.h>
 
-#include "app/plot.h"
+#include "io/plot.h"
 
 namespace {
 

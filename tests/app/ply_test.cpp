@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/ply_io.h"
+#include "io/ply_io.h"
 #include "support/expect_error.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"

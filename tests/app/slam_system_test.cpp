@@ -2,10 +2,11 @@
 // ground truth.
 #include <gtest/gtest.h>
 
-#include "app/dataset.h"
-#include "app/evaluation.h"
-#include "app/slam.h"
-#include "app/synthetic_sequence.h"
+#include "datasets/dataset.h"
+#include "commands/evaluation.h"
+#include "slam/slam_system.h"
+#include "datasets/synthetic_sequence.h"
+#include "splat/error.h"
 #include "splat/losses.h"
 #include "support/backends.h"
 #include "support/temp_dir.h"
@@ -132,11 +133,12 @@ TEST(SlamSystem, RelocalizationAfterRefinementKeepsTheTrajectoryClose) {
   config.relocalize_iterations = 5;
   app::SlamSystem slam(*rasterizer, config);
   const std::vector<app::FrameRecord> records = process_all(slam, dataset);
-  const app::SlamSystem::Refinement refined = slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); });
-  EXPECT_TRUE(refined.T_world_cam[0].isApprox(records[0].T_world_cam, 0));
+  slam.refine_map([&](std::size_t i) { return dataset.load(i); });
+  const std::vector<Eigen::Isometry3d> refined = slam.trajectory();
+  EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
   std::vector<app::StampedPose> estimate, truth;
   for (std::size_t i = 0; i < records.size(); ++i) {
-    estimate.push_back({records[i].timestamp, refined.T_world_cam[i]});
+    estimate.push_back({records[i].timestamp, refined[i]});
     truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
   }
   const double ate = app::evaluate_trajectory(estimate, truth).ate_rmse;
@@ -153,25 +155,33 @@ double mean_psnr(splat::Rasterizer& rasterizer, const app::SlamSystem& slam, con
   double sum = 0;
   for (std::size_t i = 0; i < records.size(); ++i) {
     const splat::RgbdFrame frame = dataset.load(i);
-    const auto render = rasterizer.forward(slam.map(), splat::posed(frame.camera, records[i].T_world_cam.inverse()),
+    const auto render = rasterizer.forward(*slam.map(), splat::posed(frame.camera, records[i].T_world_cam.inverse()),
                                            splat::images_only());
     sum += splat::psnr(render.rgb, frame.rgb, 3);
   }
   return sum / static_cast<double>(records.size());
 }
 
-// Which frames the final sweep visits: the keyframes, or every frame tracked (failed ones have
-// no trustworthy pose).
+// Which frames the final sweep visits: the keyframes, or every frame tracked.
 TEST(SlamSystem, RefinementVisitsKeyframesOrEveryTrackedFrame) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 6);
   auto rasterizer = splat::make_cpu_rasterizer({1});
-  std::vector<app::FrameRecord> records(5);
-  records[0].keyframe = records[3].keyframe = true;
-  records[2].tracked = false;
-  app::SlamConfig config;
-  config.refine_all_frames = false;
-  EXPECT_EQ(app::SlamSystem(*rasterizer, config).refine_frames(records), (std::vector<std::size_t>{0, 3}));
-  config.refine_all_frames = true;
-  EXPECT_EQ(app::SlamSystem(*rasterizer, config).refine_frames(records), (std::vector<std::size_t>{0, 1, 3, 4}));
+  for (const bool all : {false, true}) {
+    app::SlamConfig config;
+    config.keyframe_every = 3;
+    config.keyframe_translation = config.keyframe_rotation_deg = 1e3;  // keyframes by count alone
+    config.mapping.iterations = 2;
+    config.refine_all_frames = all;
+    app::SlamSystem slam(*rasterizer, config);
+    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+    std::vector<std::size_t> expected;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      if (records[i].keyframe || (all && records[i].tracked)) expected.push_back(i);
+    }
+    EXPECT_EQ(slam.refine_frames(), expected) << "refine_all_frames " << all;
+    EXPECT_EQ(slam.refine_frames().size(), all ? records.size() : 2u) << "frames 0 and 3 are the keyframes";
+  }
 }
 
 // The final sweep over every tracked frame (reloaded from the dataset) undoes what later windows
@@ -186,16 +196,19 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   std::vector<app::FrameRecord> records = process_all(slam, dataset);
   const double before = mean_psnr(*rasterizer, slam, dataset, records);
   std::size_t visits = 0, total = 0;
-  const app::SlamSystem::Refinement refined =
-      slam.refine_map(records, [&](std::size_t i) { return dataset.load(i); },
+  for (std::size_t i = 0; i < records.size(); ++i) records[i].T_world_cam = slam.trajectory()[i];
+  const app::SlamSystem::Refinement refinement =
+      slam.refine_map([&](std::size_t i) { return dataset.load(i); },
                       [&](std::size_t done, std::size_t all) {
                         visits = done;
                         total = all;
                       });
-  ASSERT_EQ(refined.T_world_cam.size(), records.size());
+  const std::vector<Eigen::Isometry3d> refined = slam.trajectory();
+  ASSERT_EQ(refined.size(), records.size());
+  EXPECT_EQ(refinement.visits, total);
   // The refined frames' poses moved with the map, but the first, which is the world frame.
   ASSERT_GT(config.mapping.refine_pose_rate_scale, 0);
-  EXPECT_TRUE(refined.T_world_cam[0].isApprox(records[0].T_world_cam, 0));
+  EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
   auto ate = [&](const std::vector<app::FrameRecord>& poses) {
     std::vector<app::StampedPose> estimate, truth;
     for (std::size_t i = 0; i < poses.size(); ++i) {
@@ -207,15 +220,15 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   const double ate_before = ate(records);
   double largest_move = 0;
   for (std::size_t i = 0; i < records.size(); ++i) {
-    largest_move = std::max(largest_move, (refined.T_world_cam[i].translation() - records[i].T_world_cam.translation()).norm());
-    records[i].T_world_cam = refined.T_world_cam[i];
+    largest_move = std::max(largest_move, (refined[i].translation() - records[i].T_world_cam.translation()).norm());
+    records[i].T_world_cam = refined[i];
   }
   const double ate_after = ate(records);
   std::printf("synthetic, %zu frames: ATE %.3f -> %.3f cm after refinement, poses moved up to %.3f cm\n",
               records.size(), 100 * ate_before, 100 * ate_after, 100 * largest_move);
   EXPECT_GT(largest_move, 0);
   ASSERT_TRUE(config.refine_all_frames);
-  EXPECT_EQ(slam.refine_frames(records).size(), records.size()) << "every frame was tracked";
+  EXPECT_EQ(slam.refine_frames().size(), records.size()) << "every frame was tracked";
   EXPECT_EQ(total, records.size() * static_cast<std::size_t>(config.refine_passes));
   EXPECT_EQ(visits, total);
   const double after = mean_psnr(*rasterizer, slam, dataset, records);
@@ -234,13 +247,13 @@ TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
     config.refine_passes = 3;
     config.refine_cache_mib = cache_mib;
     app::SlamSystem slam(*rasterizer, config);
-    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+    process_all(slam, dataset);
     loads = 0;
-    const app::SlamSystem::Refinement r = slam.refine_map(records, [&](std::size_t i) {
+    slam.refine_map([&](std::size_t i) {
       ++loads;
       return dataset.load(i);
     });
-    return std::make_pair(r.T_world_cam, slam.map().means);
+    return std::make_pair(slam.trajectory(), slam.map()->means);
   };
   std::size_t cached_loads = 0, reloads = 0;
   const auto cached = refine(app::SlamConfig{}.refine_cache_mib, cached_loads);
@@ -250,6 +263,75 @@ TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
   ASSERT_EQ(cached.first.size(), reloaded.first.size());
   for (std::size_t i = 0; i < cached.first.size(); ++i) EXPECT_TRUE(cached.first[i].isApprox(reloaded.first[i], 0)) << i;
   EXPECT_EQ(cached.second, reloaded.second);
+}
+
+}  // namespace
+
+namespace {
+
+// One system, both modes: driven with a thread for mapping, waiting for each keyframe to be
+// mapped before the next frame (what a live camera slower than mapping gives), it tracks
+// against the same maps as the sequential run and ends with the same poses, corrections of the
+// keyframes included.
+TEST(SlamSystem, ThreadedMappingThatKeepsUpGivesTheSequentialTrajectory) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 10);
+  app::SlamConfig config;
+  config.mapping.iterations = 10;
+  auto rasterizer = splat::make_cpu_rasterizer({2});
+  app::SlamSystem sequential(*rasterizer, config);
+  const std::vector<app::FrameRecord> records = process_all(sequential, dataset);
+  auto tracking = splat::make_cpu_rasterizer({2}), mapping = splat::make_cpu_rasterizer({2});
+  app::SlamSystem threaded(*tracking, *mapping, config);
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
+    const app::FrameRecord r = threaded.process(dataset.load(i));
+    EXPECT_EQ(r.keyframe, records[i].keyframe) << "frame " << i;
+    threaded.wait_for_mapping();
+  }
+  threaded.finish();
+  const std::vector<Eigen::Isometry3d> a = sequential.trajectory(), b = threaded.trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  bool corrected = false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(a[i].isApprox(b[i], 1e-12)) << "frame " << i << ": " << (a[i].translation() - b[i].translation()).norm() << " m apart";
+    corrected = corrected || !b[i].isApprox(records[i].T_world_cam, 1e-9);
+  }
+  EXPECT_TRUE(corrected) << "mapping moved no keyframe: the threaded trajectory must carry its corrections";
+  EXPECT_EQ(threaded.mapping_totals().keyframes_mapped, sequential.mapping_totals().keyframes_mapped);
+  EXPECT_EQ(threaded.mapping_totals().keyframes_skipped, 0u);
+  EXPECT_EQ(threaded.map()->means, sequential.map()->means);
+  EXPECT_EQ(threaded.map()->opacity_logits, sequential.map()->opacity_logits);
+}
+
+// A mapper that cannot keep up skips keyframes (the newest one waiting wins) and tracking goes on.
+TEST(SlamSystem, ThreadedMappingSkipsKeyframesItCannotKeepUpWith) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 12);
+  app::SlamConfig config;
+  config.keyframe_every = 1;
+  config.mapping.iterations = 200;  // far slower than tracking
+  auto tracking = splat::make_cpu_rasterizer({1}), mapping = splat::make_cpu_rasterizer({1});
+  app::SlamSystem threaded(*tracking, *mapping, config);
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) threaded.process(dataset.load(i));
+  threaded.finish();
+  const app::MappingTotals t = threaded.mapping_totals();
+  EXPECT_EQ(t.keyframes_mapped + t.keyframes_skipped, threaded.keyframes());
+  EXPECT_GT(t.keyframes_skipped, 0u);
+  EXPECT_EQ(threaded.trajectory().size(), dataset.entries.size());
+}
+
+TEST(SlamSystem, ThreadedModeRefusesTheTrackingRasterizerForMapping) {
+  auto rasterizer = splat::make_cpu_rasterizer({1});
+  EXPECT_THROW(
+      {
+        try {
+          app::SlamSystem(*rasterizer, *rasterizer, app::SlamConfig{});
+        } catch (const splat::Error& e) {
+          EXPECT_NE(std::string(e.what()).find("rasterizer of its own"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      splat::Error);
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "app/trajectory.h"
-#include "app/views.h"
+#include "io/trajectory.h"
+#include "viewer/views.h"
 #include "support/expect_error.h"
 #include "support/temp_dir.h"
 

@@ -6,8 +6,8 @@
 #include <random>
 #include <string>
 
-#include "app/ply_io.h"
-#include "app/views.h"
+#include "io/ply_io.h"
+#include "viewer/views.h"
 #include "support/backends.h"
 #include "support/parity.h"
 #include "support/test_data.h"

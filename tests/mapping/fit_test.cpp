@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/dataset.h"
+#include "datasets/dataset.h"
 #include "mapping/gaussian_adam.h"
 #include "mapping/initialize.h"
 #include "splat/losses.h"

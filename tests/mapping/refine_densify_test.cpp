@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "app/dataset.h"
-#include "app/synthetic_sequence.h"
+#include "datasets/dataset.h"
+#include "datasets/synthetic_sequence.h"
 #include "mapping/mapper.h"
 #include "splat/rasterizer.h"
 #include "support/temp_dir.h"

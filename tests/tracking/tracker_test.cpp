@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "app/ply_io.h"
-#include "app/views.h"
+#include "io/ply_io.h"
+#include "viewer/views.h"
 #include "splat/se3.h"
 #include "support/test_data.h"
 #include "tracking/tracker.h"

@@ -5,19 +5,34 @@
 
 #include "splat/adam.h"
 #include "splat/error.h"
+#include "splat/field_check.h"
 #include "splat/se3.h"
 
 namespace tracking {
 
-void TrackingConfig::validate() const {
-  auto fail = [](const std::string& what) { throw splat::Error("TrackingConfig: " + what); };
-  if (pyramid.empty() || pyramid.size() != iterations.size()) fail("pyramid and iterations must be non-empty and of equal length");
-  for (int f : pyramid) if (f < 1) fail("pyramid factors must be >= 1");
-  if (!(depth_sigma > 0) || !(color_sigma > 0) || !(huber > 0)) fail("depth_sigma, color_sigma and huber must be positive");
-  if (!(color_weight >= 0)) fail("color_weight must be >= 0");
-  if (color_max_factor < 1) fail("color_max_factor must be >= 1");
-  if (!(alpha_threshold >= 0 && alpha_threshold < 1)) fail("alpha_threshold must be in [0, 1)");
-  if (!(min_step_translation >= 0 && min_step_rotation >= 0)) fail("min_step_translation and min_step_rotation must be >= 0");
+void TrackingConfig::validate(const std::string& prefix) const {
+  const splat::FieldCheck check(prefix);
+  if (pyramid.empty()) check.fail("pyramid", "at least one level", "[]");
+  if (iterations.size() != pyramid.size()) {
+    check.fail("iterations", "one count per pyramid level (" + std::to_string(pyramid.size()) + ")",
+               std::to_string(iterations.size()) + " counts");
+  }
+  for (int f : pyramid) check.at_least("pyramid", f, 1);
+  for (int n : iterations) check.at_least("iterations", n, 0);
+  check.at_least("warmup_iterations", warmup_iterations, 0);
+  check.positive("warmup_step_translation", warmup_step_translation);
+  check.positive("warmup_step_rotation", warmup_step_rotation);
+  check.positive("depth_sigma", depth_sigma);
+  check.positive("color_sigma", color_sigma);
+  check.at_least("color_weight", color_weight, 0.0);
+  check.at_least("color_max_factor", color_max_factor, 1);
+  check.positive("huber", huber);
+  if (!(alpha_threshold >= 0 && alpha_threshold < 1)) check.fail("alpha_threshold", "a number in [0, 1)", alpha_threshold);
+  check.positive("outlier_factor", outlier_factor);
+  check.at_least("min_step_translation", min_step_translation, 0.0);
+  check.at_least("min_step_rotation", min_step_rotation, 0.0);
+  check.in_range("min_overlap", min_overlap, 0.0, 1.0);
+  check.positive("max_median_residual", max_median_residual);
 }
 
 namespace {

@@ -1,0 +1,150 @@
+#include "commands/eval_command.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "io/atomic_file.h"
+#include "commands/evaluation.h"
+#include "io/image_io.h"
+#include "io/map_io.h"
+#include "io/plot.h"
+#include "commands/progress.h"
+#include "mapping/vignetting.h"
+#include "splat/error.h"
+#include "splat/losses.h"
+
+namespace app {
+namespace {
+
+// The camera vignetting the run estimated (summary.json "vignetting"), or none.
+mapping::Vignetting run_vignetting(const std::filesystem::path& run) {
+  mapping::Vignetting v;
+  std::ifstream in(run / "summary.json");
+  if (!in) return v;
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw splat::Error((run / "summary.json").string() + ": not valid JSON");
+  if (!j.contains("vignetting")) return v;
+  const nlohmann::json& k = j["vignetting"];
+  if (!k.is_object() || !k.contains("k1") || !k.contains("k2") || !k["k1"].is_number() || !k["k2"].is_number()) {
+    throw splat::Error((run / "summary.json").string() + ": \"vignetting\" needs numbers k1 and k2");
+  }
+  v.k1 = k["k1"].get<double>();
+  v.k2 = k["k2"].get<double>();
+  if (!std::isfinite(v.k1) || !std::isfinite(v.k2)) throw splat::Error((run / "summary.json").string() + ": vignetting is not finite");
+  return v;
+}
+
+}  // namespace
+
+int run_eval(const EvalOptions& o) {
+  const Dataset dataset = open_dataset(o.dataset, o.dataset_options);
+  if (!dataset.has_ground_truth()) throw splat::Error(o.dataset.string() + ": the dataset has no ground truth");
+  const std::vector<StampedPose> estimate = read_tum_trajectory(o.run / "trajectory.txt");
+  std::vector<StampedPose> truth;
+  for (const auto& e : dataset.entries) {
+    if (e.T_world_cam_truth) truth.push_back({e.timestamp, *e.T_world_cam_truth});
+  }
+  const TrajectoryErrors errors = evaluate_trajectory(estimate, truth, o.sim3);
+
+  // Rendering quality at the estimated pose of every (N-th) input frame.
+  const LoadedMap map = load_map(o.run / "map.ply");
+  std::string note;
+  auto rasterizer = make_rasterizer(o.backend, note);
+  std::vector<double> ts;
+  for (const auto& p : estimate) ts.push_back(p.timestamp);
+  std::vector<double> te;
+  for (const auto& e : dataset.entries) te.push_back(e.timestamp);
+  const auto pairs = associate(te, ts, 1e-4);  // the run's lines carry the frames' own timestamps
+  const mapping::Vignetting vignetting = run_vignetting(o.run);
+  double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0, psnr_radiance = 0;
+  std::size_t rendered = 0;
+  std::vector<double> frame_times, frame_psnr, frame_ssim;  // per rendered frame, for the plot
+  Progress progress("eval renders", pairs.size(), "frames");
+  for (std::size_t k = 0; k < pairs.size(); k += static_cast<std::size_t>(std::max(1, o.every))) {
+    const splat::RgbdFrame frame = dataset.load(pairs[k].first);
+    const splat::Camera cam = splat::posed(frame.camera, estimate[pairs[k].second].T_world_cam.inverse());
+    splat::ForwardResult f = rasterizer->forward(map.gaussians, cam, {});
+    psnr_radiance += splat::psnr(f.rgb, frame.rgb, 3);
+    vignetting.apply(f.rgb, cam);  // compared as the camera records it
+    std::vector<float> valid(frame.depth.size()), grad(f.rgb.size());
+    for (std::size_t p = 0; p < valid.size(); ++p) valid[p] = frame.depth[p] > 0 ? 1.f : 0.f;
+    frame_times.push_back(frame.timestamp);
+    frame_psnr.push_back(splat::psnr(f.rgb, frame.rgb, 3));
+    frame_ssim.push_back(1 - splat::dssim_loss<float>(f.rgb, frame.rgb, frame.width(), frame.height(), 3, grad));
+    psnr += frame_psnr.back();
+    psnr_masked += splat::psnr(f.rgb, frame.rgb, 3, valid);
+    ssim += frame_ssim.back();
+    std::vector<float> dgrad(f.depth.size());
+    depth_l1 += splat::depth_l1_loss<float>(f.depth_normalized, frame.depth, {}, dgrad);
+    ++rendered;
+    progress.update(k + 1);
+  }
+  progress.finish();
+  const double n = std::max<double>(1, static_cast<double>(rendered));
+
+  nlohmann::json j = {
+      {"run", o.run.string()},
+      {"dataset", o.dataset.string()},
+      {"alignment", o.sim3 ? "sim3" : "se3"},
+      {"ate", {{"rmse_m", errors.ate_rmse}, {"mean_m", errors.ate_mean}, {"max_m", errors.ate_max}, {"matched_frames", errors.matched}, {"scale", errors.scale}}},
+      {"rpe_1s", {{"translation_rmse_m", errors.rpe_translation_rmse}, {"rotation_rmse_deg", errors.rpe_rotation_rmse_deg}, {"pairs", errors.rpe_pairs}}},
+      {"rendering", {{"frames", rendered}, {"psnr_db", psnr / n}, {"ssim", ssim / n}, {"depth_l1_m", depth_l1 / n},
+                     {"psnr_masked_valid_depth_db", psnr_masked / n},
+                     {"psnr_without_vignetting_db", psnr_radiance / n},
+                     {"vignetting", {{"k1", vignetting.k1}, {"k2", vignetting.k2}}},
+                     {"per_frame", {{"timestamp", frame_times}, {"psnr_db", frame_psnr}, {"ssim", frame_ssim}}}}},
+      {"gaussians", map.gaussians.size()},
+  };
+  write_json(o.run / "eval.json", j);
+
+  // Plots: top view (the two axes along which the truth moves most) and error over time.
+  Eigen::Vector3d lo = errors.truth.front(), hi = lo;
+  for (const auto& p : errors.truth) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Eigen::Vector3d extent = hi - lo;
+  int a = 0, b = 1;
+  if (extent[2] > extent[a] && extent[2] > extent[b]) (extent[0] < extent[1] ? a : b) = 2;
+  if (a > b) std::swap(a, b);
+  LinePlot top(640, 640);
+  top.equal_axes(true);
+  std::vector<double> gx, gy, ex, ey;
+  for (std::size_t k = 0; k < errors.truth.size(); ++k) {
+    gx.push_back(errors.truth[k][a]), gy.push_back(errors.truth[k][b]);
+    ex.push_back(errors.aligned_estimate[k][a]), ey.push_back(errors.aligned_estimate[k][b]);
+  }
+  const char* axis_names[3] = {"x", "y", "z"};
+  top.labels(std::string(axis_names[a]) + " (m)", std::string(axis_names[b]) + " (m)");
+  top.title("top view, estimate aligned to ground truth");
+  top.add(gx, gy, {0, 0, 0}, "ground truth");
+  top.add(ex, ey, {220, 30, 30}, "estimate");
+  write_png_rgb8(o.run / "trajectory_top.png", top.render());
+  LinePlot curve(800, 300);
+  std::vector<double> t, e;
+  for (std::size_t k = 0; k < errors.times.size(); ++k) t.push_back(errors.times[k] - errors.times.front()), e.push_back(errors.ate_errors[k] * 100);
+  curve.labels("time (s)", "ATE (cm)");
+  char rmse[64];
+  std::snprintf(rmse, sizeof rmse, "position error after alignment, RMSE %.2f cm", errors.ate_rmse * 100);
+  curve.title(rmse);
+  curve.add(t, e, {30, 60, 200});
+  write_png_rgb8(o.run / "ate_over_time.png", curve.render());
+  if (!frame_times.empty()) {
+    LinePlot quality(800, 300);
+    std::vector<double> since_start;
+    for (double ts_frame : frame_times) since_start.push_back(ts_frame - frame_times.front());
+    quality.labels("time (s)", "PSNR (dB)");
+    char mean[64];
+    std::snprintf(mean, sizeof mean, "PSNR of the final map at each input frame, mean %.2f dB", psnr / n);
+    quality.title(mean);
+    quality.add(since_start, frame_psnr, {30, 140, 60});
+    write_png_rgb8(o.run / "psnr_over_time.png", quality.render());
+  }
+
+  std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth, %.2f dB without vignetting), SSIM %.3f, depth L1 %.2f cm -> %s\n",
+              errors.ate_rmse * 100, errors.matched, errors.rpe_translation_rmse * 100, errors.rpe_rotation_rmse_deg,
+              psnr / n, psnr_masked / n, psnr_radiance / n, ssim / n, depth_l1 / n * 100, (o.run / "eval.json").c_str());
+  return 0;
+}
+
+}  // namespace app

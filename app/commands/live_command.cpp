@@ -1,0 +1,252 @@
+#include "commands/live_command.h"
+
+#include <algorithm>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "io/image_io.h"
+#include "slam/slam_system.h"
+#include "viewer/live_view.h"
+#include "commands/progress.h"
+#include "commands/run_outputs.h"
+#include "io/slam_config_io.h"
+#include "viewer/viewer_window.h"
+#include "splat/error.h"
+
+namespace app {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Set by SIGINT/SIGTERM: the run stops taking frames and writes its outputs.
+volatile std::sig_atomic_t g_interrupted = 0;
+void on_signal(int) { g_interrupted = 1; }
+
+// Latencies of the most recent frames (bounded, so a long session does not grow memory).
+class LatencyWindow {
+ public:
+  void add(double ms) {
+    if (values_.size() == kCapacity) values_.pop_front();
+    values_.push_back(ms);
+  }
+  double percentile(double q) const {
+    if (values_.empty()) return 0;
+    std::vector<double> sorted(values_.begin(), values_.end());
+    const std::size_t k = std::min(
+        sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+    return sorted[k];
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = 4096;
+  std::deque<double> values_;
+};
+
+splat::Image8 to_image8(const splat::RgbdFrame& frame) {
+  splat::Image8 image(frame.width(), frame.height(), 3);
+  for (std::size_t k = 0; k < image.data.size(); ++k) {
+    image.data[k] = static_cast<uint8_t>(std::clamp(frame.rgb[k], 0.f, 1.f) * 255.f + 0.5f);
+  }
+  return image;
+}
+
+// What the pipeline thread shares with the window thread.
+struct Shared {
+  std::mutex mutex;
+  LiveViewState view;
+  std::string stats = "gslam live: waiting for frames";
+  std::size_t tracked = 0;
+  bool paused = false, snapshot = false, done = false;
+  std::atomic<bool> stop{false};
+};
+
+}  // namespace
+
+int run_live(const LiveOptions& o) {
+  if (!(o.checkpoint_seconds > 0)) throw splat::Error("--checkpoint-seconds must be > 0");
+  const SlamConfig config = load_slam_config(o.config);
+  // The dataset is opened (and checked) first; the replay clock starts once everything else is
+  // ready, so start-up time does not count as dropped frames.
+  std::optional<Dataset> dataset;
+  if (!o.watch) dataset = open_dataset(o.source, o.dataset_options);
+  std::string note;
+  auto tracking_rasterizer = make_rasterizer(o.backend, note);
+  std::fprintf(stderr, "%s\n", note.c_str());
+  auto mapping_rasterizer = make_rasterizer(o.backend, note);
+  std::unique_ptr<ViewerWindow> window;
+  if (!o.headless) window = std::make_unique<ViewerWindow>("gslam live");
+  auto view_rasterizer = splat::make_cpu_rasterizer({1});
+  SlamSystem live(*tracking_rasterizer, *mapping_rasterizer, config);
+  std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, o.watch_options)
+                                                : make_replay_source(std::move(*dataset), o.speed);
+  std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
+  RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer);
+  Shared shared;
+  LatencyWindow latency;
+  std::vector<StampedPose> truth;
+  std::size_t paused_dropped = 0;
+  const std::size_t max_frames =
+      o.dataset_options.max_frames > 0 ? std::size_t(o.dataset_options.max_frames) : 0;
+  g_interrupted = 0;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  // Outputs with the poses as mapping has corrected them so far.
+  auto checkpoint = [&] {
+    const std::shared_ptr<const splat::Gaussians> map = live.map();
+    if (!map) return;  // no frame yet
+    outputs.update_poses(live.trajectory());
+    outputs.set_mapping(live.mapping_totals());
+    outputs.checkpoint(*map, live.keyframes(), true);
+  };
+  auto pipeline = [&] {
+    Progress progress("live", 0, "frames");
+    Clock::time_point last_checkpoint = Clock::now();
+    while (!shared.stop && !g_interrupted) {
+      std::optional<ArrivedFrame> arrived = source->next(std::chrono::milliseconds(100));
+      if (!arrived) {
+        if (source->finished()) break;
+        continue;
+      }
+      bool paused = false, snapshot = false;
+      {
+        std::lock_guard lock(shared.mutex);
+        paused = shared.paused;
+        snapshot = std::exchange(shared.snapshot, false);
+      }
+      if (snapshot) checkpoint();
+      if (paused) {  // the camera goes on; what arrives while paused is dropped
+        ++paused_dropped;
+        continue;
+      }
+      const FrameRecord record = live.process(arrived->frame);
+      const double ms =
+          std::chrono::duration<double, std::milli>(Clock::now() - arrived->arrived).count();
+      latency.add(ms);
+      if (!record.tracked)
+        std::fprintf(stderr, "\nframe at %.3f s: tracking failed (%s)\n", record.timestamp,
+                     record.reason.c_str());
+      outputs.add(record, 0);
+      if (arrived->T_world_cam_truth)
+        truth.push_back({record.timestamp, *arrived->T_world_cam_truth});
+      const std::size_t n = outputs.records().size();
+      char stats[256];
+      std::snprintf(stats, sizeof(stats),
+                    "gslam live: %zu frames, %.1f frames/s, latency p95 %.0f ms, %zu Gaussians, "
+                    "%zu dropped%s",
+                    n, static_cast<double>(n) / std::max(1e-9, outputs.elapsed_seconds()),
+                    latency.percentile(0.95), record.gaussians, source->dropped() + paused_dropped,
+                    window && shared.paused ? ", paused" : "");
+      {
+        std::lock_guard lock(shared.mutex);
+        shared.view.map = live.map();
+        shared.view.trajectory.push_back(record.T_world_cam.translation());
+        shared.view.T_world_cam = record.T_world_cam;
+        if (window) shared.view.input = to_image8(arrived->frame);
+        shared.stats = stats;
+        shared.tracked = n;
+      }
+      progress.update(n, std::to_string(record.gaussians) + " Gaussians, latency p95 " +
+                             std::to_string(static_cast<int>(latency.percentile(0.95))) + " ms, " +
+                             std::to_string(source->dropped() + paused_dropped) + " dropped");
+      if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >=
+          o.checkpoint_seconds) {
+        checkpoint();
+        last_checkpoint = Clock::now();
+      }
+      if (max_frames > 0 && n >= max_frames) break;
+    }
+    progress.finish();
+    std::lock_guard lock(shared.mutex);
+    shared.done = true;
+  };
+
+  std::exception_ptr error;
+  if (!window) {
+    pipeline();
+  } else {
+    std::thread worker([&] {
+      try {
+        pipeline();
+      } catch (...) {
+        error = std::current_exception();
+        std::lock_guard lock(shared.mutex);
+        shared.done = true;
+      }
+    });
+    bool screenshot_taken = false;
+    std::size_t snapshots = 0;
+    while (true) {
+      window->poll();
+      LiveViewState state;
+      std::string title;
+      std::size_t tracked = 0;
+      bool done = false;
+      {
+        std::lock_guard lock(shared.mutex);
+        shared.paused = window->paused();
+        state = shared.view;
+        title = shared.stats;
+        tracked = shared.tracked;
+        done = shared.done;
+      }
+      if (window->closed() || g_interrupted) shared.stop = true;
+      const bool last = done || shared.stop;  // draw once more, then leave
+      // The screenshot once enough frames are tracked, or at the end if the stream was shorter.
+      const bool want_screenshot =
+          !o.screenshot.empty() && !screenshot_taken &&
+          (tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) || last);
+      const bool want_snapshot = window->take_snapshot_request();
+      splat::Image8 capture;
+      window->show(compose_live_view(state, window->view(), *view_rasterizer), title,
+                   want_screenshot || want_snapshot ? &capture : nullptr);
+      if (want_screenshot) {
+        write_png_rgb8(o.screenshot, capture);
+        screenshot_taken = true;
+      }
+      if (want_snapshot) {
+        char name[48];
+        std::snprintf(name, sizeof(name), "snapshot_%03zu.png", snapshots++);
+        std::filesystem::create_directories(o.out / "snapshots");
+        write_png_rgb8(o.out / "snapshots" / name, capture);
+        std::lock_guard lock(shared.mutex);
+        shared.snapshot = true;  // the pipeline writes map.ply, trajectory and summary
+      }
+      if (last) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    }
+    worker.join();
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  live.finish();
+  if (error) std::rethrow_exception(error);
+
+  const MappingTotals mapping = live.mapping_totals();
+  outputs.update_poses(live.trajectory());
+  outputs.set_mapping(mapping);
+  outputs.extra()["live"] = {{"source", source->describe()},
+                             {"frames_received", source->delivered() + source->dropped()},
+                             {"frames_dropped", source->dropped() + paused_dropped},
+                             {"frames_dropped_while_paused", paused_dropped},
+                             {"tracking_latency_ms", {{"p50", latency.percentile(0.5)}, {"p95", latency.percentile(0.95)}}},
+                             {"keyframes_mapped", mapping.keyframes_mapped},
+                             {"keyframes_skipped", mapping.keyframes_skipped},
+                             {"interrupted", g_interrupted != 0}};
+  const std::shared_ptr<const splat::Gaussians> map = live.map();
+  const splat::Gaussians empty;
+  outputs.finish(map ? *map : empty, live.keyframes(), *tracking_rasterizer, source->intrinsics(), truth);
+  std::printf(
+      "live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu "
+      "skipped), %zu Gaussians -> %s\n",
+      outputs.records().size(), source->dropped() + paused_dropped, latency.percentile(0.95),
+      mapping.keyframes_mapped, mapping.keyframes_skipped, map ? map->size() : std::size_t(0), o.out.c_str());
+  return 0;
+}
+
+}  // namespace app

@@ -1,0 +1,139 @@
+#include "commands/run_outputs.h"
+
+#include <cstdio>
+#include <fstream>
+
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "io/map_io.h"
+#include "splat/error.h"
+#include "splat/rgbd_frame.h"
+
+namespace app {
+namespace {
+
+// Peak resident memory of this process in MiB (Linux VmHWM), 0 if unknown.
+double peak_memory_mib() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmHWM:") {
+      double kib = 0;
+      status >> kib;
+      return kib / 1024.0;
+    }
+    std::getline(status, key);
+  }
+  return 0;
+}
+
+}  // namespace
+
+RunOutputs::RunOutputs(std::filesystem::path out, std::string input,
+                       const splat::Rasterizer& rasterizer)
+    : out_(std::move(out)),
+      input_(std::move(input)),
+      rasterizer_(rasterizer),
+      start_(std::chrono::steady_clock::now()) {
+  std::filesystem::create_directories(out_);
+}
+
+double RunOutputs::elapsed_seconds() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+void RunOutputs::add(const FrameRecord& record, double loading_ms) {
+  tracking_ms_ += record.tracking_ms;
+  mapping_ms_ += record.mapping_ms;
+  loading_ms_ += loading_ms;
+  failures_ += record.tracked ? 0 : 1;
+  retries_ += record.retried ? 1 : 0;
+  records_.push_back(record);
+  trajectory_.push_back({record.timestamp, record.T_world_cam});
+}
+
+void RunOutputs::update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam) {
+  if (T_world_cam.size() != records_.size()) {
+    throw splat::Error("update_poses: " + std::to_string(T_world_cam.size()) + " poses for " +
+                       std::to_string(records_.size()) + " frames");
+  }
+  for (std::size_t i = 0; i < records_.size(); ++i) {
+    records_[i].T_world_cam = trajectory_[i].T_world_cam = T_world_cam[i];
+  }
+}
+
+void RunOutputs::set_mapping(const MappingTotals& t) {
+  extra_["mapping"] = {{"keyframes_mapped", t.keyframes_mapped},   {"keyframes_skipped", t.keyframes_skipped},
+                       {"gaussians_added", t.gaussians_added},     {"gaussians_pruned", t.gaussians_pruned},
+                       {"iterations", t.iterations},               {"last_loss", t.last_loss},
+                       {"seconds", t.mapping_ms / 1000}};
+}
+
+nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes,
+                                   bool complete) const {
+  const double seconds = elapsed_seconds();
+  const double n = std::max<double>(1, static_cast<double>(records_.size()));
+  nlohmann::json j = {
+      {"complete", complete},
+      {"dataset", input_},
+      {"backend", rasterizer_.name()},
+      {"frames", records_.size()},
+      {"keyframes", keyframes},
+      {"gaussians", map.size()},
+      {"fps", static_cast<double>(records_.size()) / std::max(seconds, 1e-9)},
+      {"seconds", seconds},
+      {"time_per_frame_ms",
+       {{"tracking", tracking_ms_ / n},
+        {"mapping", mapping_ms_ / n},
+        {"loading", loading_ms_ / n}}},
+      {"tracking_failures", failures_},
+      {"tracking_retries", retries_},
+      {"peak_memory_mib", peak_memory_mib()},
+      {"device_memory_mib", static_cast<double>(rasterizer_.device_memory_bytes()) / (1 << 20)},
+  };
+  if (has_errors_) {
+    j["ate_rmse_m"] = errors_.ate_rmse;
+    j["ate_matched_frames"] = errors_.matched;
+  }
+  j.update(extra_);
+  return j;
+}
+
+void RunOutputs::checkpoint(const splat::Gaussians& map, std::size_t keyframes, bool with_map) {
+  write_tum_trajectory(out_ / "trajectory.txt", trajectory_);
+  write_json(out_ / "summary.json", summary(map, keyframes, false));
+  if (with_map && !map.empty()) save_map(out_ / "map.ply", map);
+}
+
+void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
+                        splat::Rasterizer& rasterizer, const splat::Camera& intrinsics,
+                        const std::vector<StampedPose>& truth) {
+  write_tum_trajectory(out_ / "trajectory.txt", trajectory_);
+  if (!map.empty()) {
+    save_map(out_ / "map.ply", map);
+    save_map(out_ / "map.glb", map);
+    // The final map seen from every keyframe.
+    std::filesystem::create_directories(out_ / "keyframes");
+    for (std::size_t i = 0; i < records_.size(); ++i) {
+      if (!records_[i].keyframe) continue;
+      const splat::Camera cam = splat::posed(intrinsics, records_[i].T_world_cam.inverse());
+      const splat::ForwardResult f = rasterizer.forward(map, cam, {});
+      char name[32];
+      std::snprintf(name, sizeof(name), "kf_%04zu", i);
+      write_png_rgb(out_ / "keyframes" / (std::string(name) + ".png"), f.width, f.height, f.rgb);
+      write_render_exr(out_ / "keyframes" / (std::string(name) + ".exr"), f.width, f.height, f.rgb,
+                       f.alpha, f.depth_normalized);
+    }
+  }
+  if (!truth.empty()) {
+    try {
+      errors_ = evaluate_trajectory(trajectory_, truth);
+      has_errors_ = true;
+    } catch (const splat::Error& e) {  // too few frames to align (a short live run): no ATE
+      extra_["ate_unavailable"] = e.what();
+    }
+  }
+  write_json(out_ / "summary.json", summary(map, keyframes, true));
+}
+
+}  // namespace app

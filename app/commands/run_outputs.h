@@ -1,0 +1,61 @@
+// What a SLAM run writes, the same for `gslam reconstruct` and `gslam live`: DIR/trajectory.txt
+// (TUM, one line per processed frame), DIR/map.ply, DIR/map.glb, DIR/keyframes/kf_NNNN.{png,exr}
+// (the final map seen from each keyframe) and DIR/summary.json. Every file is written
+// atomically, so an interrupted run leaves the last complete outputs.
+#pragma once
+#include <chrono>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "datasets/dataset.h"
+#include "commands/evaluation.h"
+#include "slam/frame_tracker.h"
+#include "slam/slam_system.h"
+#include "io/trajectory.h"
+#include "splat/rasterizer.h"
+
+namespace app {
+
+class RunOutputs {
+ public:
+  RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer);
+
+  // Records one processed frame.
+  void add(const FrameRecord& record, double loading_ms);
+  // Replaces the recorded poses (one per frame added, in order) with later estimates.
+  void update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam);
+  // What mapping did (summary.json "mapping").
+  void set_mapping(const MappingTotals& totals);
+  // Extra summary fields (live mode: dropped frames, latency percentiles).
+  nlohmann::json& extra() { return extra_; }
+  // Writes trajectory.txt and summary.json (complete: false), and map.ply when `with_map`.
+  void checkpoint(const splat::Gaussians& map, std::size_t keyframes, bool with_map);
+  // Writes everything: trajectory, map.ply, map.glb, keyframe renders and the final summary
+  // (with ATE when `truth` has poses).
+  void finish(const splat::Gaussians& map, std::size_t keyframes, splat::Rasterizer& rasterizer,
+              const splat::Camera& intrinsics, const std::vector<StampedPose>& truth);
+
+  const std::vector<FrameRecord>& records() const { return records_; }
+  std::size_t failures() const { return failures_; }
+  double elapsed_seconds() const;
+
+ private:
+  nlohmann::json summary(const splat::Gaussians& map, std::size_t keyframes, bool complete) const;
+
+  std::filesystem::path out_;
+  std::string input_;
+  const splat::Rasterizer& rasterizer_;
+  std::chrono::steady_clock::time_point start_;
+  std::vector<FrameRecord> records_;
+  std::vector<StampedPose> trajectory_;
+  double tracking_ms_ = 0, mapping_ms_ = 0, loading_ms_ = 0;
+  std::size_t failures_ = 0, retries_ = 0;
+  nlohmann::json extra_ = nlohmann::json::object();
+  TrajectoryErrors errors_;
+  bool has_errors_ = false;
+};
+
+
+}  // namespace app

@@ -1,0 +1,247 @@
+#include "datasets/dataset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "io/image_io.h"
+#include "io/trajectory.h"
+#include "io/file_error.h"
+#include "splat/error.h"
+#include "splat/se3.h"
+
+namespace app {
+namespace {
+
+struct ListEntry {
+  double timestamp;
+  std::string file;
+};
+
+// TUM list file: '#' comments, then "timestamp filename" per line.
+std::vector<ListEntry> read_list(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, "cannot open file");
+  std::vector<ListEntry> out;
+  std::string line;
+  for (int line_no = 1; std::getline(in, line); ++line_no) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    ListEntry e;
+    if (!(words >> e.timestamp >> e.file)) fail(path, "line " + std::to_string(line_no) + ": expected 'timestamp filename'");
+    out.push_back(e);
+  }
+  return out;
+}
+
+void apply_intrinsics(splat::Camera& cam, const std::string& text) {
+  std::stringstream ss(text);
+  std::vector<double> v;
+  for (std::string item; std::getline(ss, item, ',');) {
+    char* end = nullptr;
+    v.push_back(std::strtod(item.c_str(), &end));
+    if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.clear(), v.push_back(-1);
+  }
+  if (v.size() != 4 || v[0] <= 0 || v[1] <= 0) throw splat::Error("intrinsics '" + text + "': expected fx,fy,cx,cy");
+  cam.fx = v[0];
+  cam.fy = v[1];
+  cam.cx = v[2];
+  cam.cy = v[3];
+}
+
+// Image size from the first colour image.
+void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
+  const splat::Image8 image = read_rgb8(rgb);
+  cam.width = image.width;
+  cam.height = image.height;
+}
+
+Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& options) {
+  Dataset d;
+  d.format = "tum";
+  d.root = root;
+  d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;
+  const std::string name = std::filesystem::absolute(root).string();
+  // Calibrated colour intrinsics of the TUM Kinects (TUM RGB-D dataset documentation).
+  if (!options.intrinsics.empty()) {
+    apply_intrinsics(d.intrinsics, options.intrinsics);
+  } else if (std::filesystem::exists(root / "intrinsics.txt")) {
+    // gslam's extension of the TUM layout: "fx fy cx cy" on one line.
+    std::ifstream in(root / "intrinsics.txt");
+    double k[4];
+    if (!(in >> k[0] >> k[1] >> k[2] >> k[3]) || k[0] <= 0 || k[1] <= 0) fail(root / "intrinsics.txt", "expected 'fx fy cx cy'");
+    d.intrinsics.fx = k[0], d.intrinsics.fy = k[1], d.intrinsics.cx = k[2], d.intrinsics.cy = k[3];
+  } else if (name.find("freiburg1") != std::string::npos) {
+    d.intrinsics.fx = 517.3, d.intrinsics.fy = 516.5, d.intrinsics.cx = 318.6, d.intrinsics.cy = 255.3;
+  } else if (name.find("freiburg2") != std::string::npos) {
+    d.intrinsics.fx = 520.9, d.intrinsics.fy = 521.0, d.intrinsics.cx = 325.1, d.intrinsics.cy = 249.7;
+  } else if (name.find("freiburg3") != std::string::npos) {
+    d.intrinsics.fx = 535.4, d.intrinsics.fy = 539.2, d.intrinsics.cx = 320.1, d.intrinsics.cy = 247.6;
+  } else {
+    fail(root, "unknown TUM camera (no freiburg1/2/3 in the path): give --intrinsics fx,fy,cx,cy");
+  }
+  std::vector<ListEntry> rgb = read_list(root / "rgb.txt"), depth = read_list(root / "depth.txt");
+  // Only entries whose files exist take part (the lists may name more frames than are present).
+  auto present = [&](std::vector<ListEntry>& list) {
+    const std::size_t before = list.size();
+    list.erase(std::remove_if(list.begin(), list.end(), [&](const ListEntry& e) { return !std::filesystem::exists(root / e.file); }), list.end());
+    return before - list.size();
+  };
+  d.skipped_missing = present(rgb) + present(depth);
+  std::vector<double> rgb_t, depth_t;
+  for (const auto& e : rgb) rgb_t.push_back(e.timestamp);
+  for (const auto& e : depth) depth_t.push_back(e.timestamp);
+  const auto pairs = associate(rgb_t, depth_t);
+  d.unmatched = rgb.size() - pairs.size();
+  std::vector<StampedPose> truth;
+  if (std::filesystem::exists(root / "groundtruth.txt")) truth = read_tum_trajectory(root / "groundtruth.txt");
+  std::vector<double> truth_t;
+  for (const auto& p : truth) truth_t.push_back(p.timestamp);
+  std::vector<double> frame_t;
+  for (const auto& [i, j] : pairs) frame_t.push_back(rgb[i].timestamp);
+  std::vector<std::optional<Eigen::Isometry3d>> frame_truth(pairs.size());
+  for (const auto& [f, g] : associate(frame_t, truth_t)) frame_truth[f] = truth[g].T_world_cam;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    d.entries.push_back({rgb[pairs[k].first].timestamp, root / rgb[pairs[k].first].file, root / depth[pairs[k].second].file, frame_truth[k]});
+  }
+  return d;
+}
+
+// Replica as NICE-SLAM and SplaTAM ship it: results/frameNNNNNN.jpg, results/depthNNNNNN.png
+// (/ 6553.5), traj.txt with one row-major 4x4 camera-to-world matrix per frame. Frames are
+// stamped at 30 Hz from 0. Intrinsics: their Replica camera (1200x680, f = 600).
+Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& options) {
+  Dataset d;
+  d.format = "replica";
+  d.root = root;
+  d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 6553.5;
+  if (!options.intrinsics.empty()) {
+    apply_intrinsics(d.intrinsics, options.intrinsics);
+  } else {
+    d.intrinsics.fx = d.intrinsics.fy = 600.0;
+    d.intrinsics.cx = 599.5;
+    d.intrinsics.cy = 339.5;
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  std::ifstream traj(root / "traj.txt");
+  if (!traj) fail(root / "traj.txt", "cannot open file");
+  std::string line;
+  for (int line_no = 1; std::getline(traj, line); ++line_no) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream words(line);
+    Eigen::Matrix4d m;
+    for (int k = 0; k < 16; ++k) {
+      if (!(words >> m(k / 4, k % 4)) || !std::isfinite(m(k / 4, k % 4))) {
+        fail(root / "traj.txt", "line " + std::to_string(line_no) + ": expected 16 numbers (a row-major 4x4 matrix)");
+      }
+    }
+    Eigen::Isometry3d pose;
+    pose.matrix() = m;
+    poses.push_back(splat::orthonormalized(pose));
+  }
+  for (std::size_t i = 0;; ++i) {
+    char rgb[32], depth[32];
+    std::snprintf(rgb, sizeof(rgb), "frame%06zu.jpg", i);
+    std::snprintf(depth, sizeof(depth), "depth%06zu.png", i);
+    const auto rgb_path = root / "results" / rgb, depth_path = root / "results" / depth;
+    if (!std::filesystem::exists(rgb_path)) break;
+    if (!std::filesystem::exists(depth_path)) {
+      ++d.skipped_missing;
+      continue;
+    }
+    DatasetEntry e{static_cast<double>(i) / 30.0, rgb_path, depth_path, std::nullopt};
+    if (i < poses.size()) e.T_world_cam_truth = poses[i];
+    d.entries.push_back(e);
+  }
+  return d;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<double>& a,
+                                                           const std::vector<double>& b,
+                                                           double max_difference) {
+  // Candidate pairs within the window (b is searched around each a by binary search).
+  std::vector<std::size_t> b_order(b.size());
+  for (std::size_t j = 0; j < b.size(); ++j) b_order[j] = j;
+  std::sort(b_order.begin(), b_order.end(), [&](std::size_t x, std::size_t y) { return b[x] < b[y]; });
+  struct Candidate {
+    double diff;
+    std::size_t i, j;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    auto lo = std::lower_bound(b_order.begin(), b_order.end(), a[i] - max_difference, [&](std::size_t j, double t) { return b[j] < t; });
+    for (auto it = lo; it != b_order.end() && b[*it] <= a[i] + max_difference; ++it) {
+      candidates.push_back({std::abs(a[i] - b[*it]), i, *it});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    return x.diff != y.diff ? x.diff < y.diff : (x.i != y.i ? x.i < y.i : x.j < y.j);
+  });
+  std::vector<uint8_t> used_a(a.size(), 0), used_b(b.size(), 0);
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  for (const auto& c : candidates) {
+    if (used_a[c.i] || used_b[c.j]) continue;
+    used_a[c.i] = used_b[c.j] = 1;
+    out.emplace_back(c.i, c.j);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+bool Dataset::has_ground_truth() const {
+  return std::any_of(entries.begin(), entries.end(), [](const DatasetEntry& e) { return e.T_world_cam_truth.has_value(); });
+}
+
+splat::RgbdFrame Dataset::load(std::size_t i) const {
+  const DatasetEntry& e = entries.at(i);
+  const splat::Image8 rgb = read_rgb8(e.rgb);
+  const splat::Image16 depth = read_png_gray16(e.depth);
+  if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
+    fail(e.rgb, "image is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) + ", expected " +
+                    std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
+  }
+  if (depth.width != rgb.width || depth.height != rgb.height) {
+    fail(e.depth, "depth is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + ", colour is " +
+                      std::to_string(rgb.width) + "x" + std::to_string(rgb.height));
+  }
+  splat::RgbdFrame f;
+  f.timestamp = e.timestamp;
+  f.camera = intrinsics;
+  f.rgb.resize(rgb.data.size());
+  for (std::size_t k = 0; k < rgb.data.size(); ++k) f.rgb[k] = static_cast<float>(rgb.data[k]) / 255.f;
+  f.depth.resize(depth.data.size());
+  const float inv = static_cast<float>(1.0 / depth_scale);
+  for (std::size_t k = 0; k < depth.data.size(); ++k) f.depth[k] = static_cast<float>(depth.data[k]) * inv;
+  return f;
+}
+
+splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb) {
+  splat::Camera cam;
+  apply_intrinsics(cam, intrinsics);
+  set_size_from(cam, rgb);
+  return cam;
+}
+
+Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options) {
+  if (!std::filesystem::is_directory(root)) fail(root, "dataset folder does not exist");
+  Dataset d;
+  if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
+    d = open_tum(root, options);
+  } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {
+    d = open_replica(root, options);
+  } else {
+    fail(root, "not a dataset folder: expected TUM (rgb.txt, depth.txt) or Replica (results/, traj.txt)");
+  }
+  if (d.entries.empty()) fail(root, "no frame has both colour and depth");
+  if (options.max_frames > 0 && d.entries.size() > static_cast<std::size_t>(options.max_frames)) {
+    d.entries.resize(static_cast<std::size_t>(options.max_frames));
+  }
+  set_size_from(d.intrinsics, d.entries.front().rgb);
+  return d;
+}
+
+}  // namespace app

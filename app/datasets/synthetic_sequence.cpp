@@ -1,0 +1,177 @@
+#include "datasets/synthetic_sequence.h"
+
+#include <cmath>
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
+
+#include <Eigen/Geometry>
+
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "io/trajectory.h"
+#include "splat/error.h"
+
+namespace app {
+namespace {
+
+using Eigen::Vector3d;
+
+struct Hit {
+  double t = std::numeric_limits<double>::infinity();
+  Vector3d point, normal, color;
+};
+
+double checker(double a, double b, double size) {
+  return (static_cast<long>(std::floor(a / size)) + static_cast<long>(std::floor(b / size))) % 2 == 0 ? 1.0 : 0.0;
+}
+
+// The room: the inside of a 5 x 3 x 5 m box (y down, floor at y = 1.5), textured walls, two
+// spheres and two boxes.
+class Scene {
+ public:
+  void intersect(const Vector3d& o, const Vector3d& d, Hit& hit) const {
+    room(o, d, hit);
+    sphere(o, d, Vector3d(-0.6, 0.9, 0.4), 0.6, hit, 0);
+    sphere(o, d, Vector3d(0.9, 1.15, -0.5), 0.35, hit, 1);
+    box(o, d, Vector3d(0.2, 0.7, 1.1), Vector3d(0.9, 1.5, 1.6), hit);
+    box(o, d, Vector3d(-1.8, 0.3, -1.6), Vector3d(-1.1, 1.5, -0.9), hit);
+  }
+
+ private:
+  static void room(const Vector3d& o, const Vector3d& d, Hit& hit) {
+    const Vector3d lo(-2.5, -1.5, -2.5), hi(2.5, 1.5, 2.5);
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        if (std::abs(d[axis]) < 1e-12) continue;
+        const double plane = side ? hi[axis] : lo[axis];
+        const double t = (plane - o[axis]) / d[axis];
+        if (t <= 1e-6 || t >= hit.t) continue;
+        const Vector3d p = o + t * d;
+        const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+        if (p[a] < lo[a] || p[a] > hi[a] || p[b] < lo[b] || p[b] > hi[b]) continue;
+        hit.t = t;
+        hit.point = p;
+        hit.normal = Vector3d::Zero();
+        hit.normal[axis] = side ? -1 : 1;
+        // Each wall its own colours, tiled in 0.4 m squares with a fine stripe texture.
+        const double c = checker(p[a], p[b], 0.4);
+        const double stripe = 0.5 + 0.5 * std::sin(p[a] * 25.0) * std::sin(p[b] * 17.0);
+        const Vector3d base[6] = {{0.8, 0.3, 0.2}, {0.2, 0.6, 0.8}, {0.9, 0.85, 0.6},
+                                  {0.35, 0.35, 0.4}, {0.3, 0.7, 0.3}, {0.7, 0.5, 0.8}};
+        hit.color = base[axis * 2 + side] * (0.55 + 0.35 * c) + Vector3d::Constant(0.1 * stripe);
+      }
+    }
+  }
+
+  static void sphere(const Vector3d& o, const Vector3d& d, const Vector3d& c, double r, Hit& hit, int style) {
+    const Vector3d oc = o - c;
+    const double b = oc.dot(d), disc = b * b - (oc.squaredNorm() - r * r);
+    if (disc < 0) return;
+    const double t = -b - std::sqrt(disc);
+    if (t <= 1e-6 || t >= hit.t) return;
+    hit.t = t;
+    hit.point = o + t * d;
+    hit.normal = (hit.point - c) / r;
+    const double u = std::atan2(hit.normal.z(), hit.normal.x()), v = std::acos(std::clamp(hit.normal.y(), -1.0, 1.0));
+    const double bands = checker(u * 4 / M_PI, v * 6 / M_PI, 1.0);
+    hit.color = style == 0 ? Vector3d(0.9, 0.75 * bands + 0.1, 0.1) : Vector3d(0.1, 0.4 + 0.4 * bands, 0.9);
+  }
+
+  static void box(const Vector3d& o, const Vector3d& d, const Vector3d& lo, const Vector3d& hi, Hit& hit) {
+    double t0 = 1e-6, t1 = hit.t;
+    int axis_hit = -1;
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(d[a]) < 1e-12) {
+        if (o[a] < lo[a] || o[a] > hi[a]) return;
+        continue;
+      }
+      double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+      if (ta > tb) std::swap(ta, tb);
+      if (ta > t0) t0 = ta, axis_hit = a;
+      t1 = std::min(t1, tb);
+      if (t0 > t1) return;
+    }
+    if (axis_hit < 0 || t0 >= hit.t) return;
+    hit.t = t0;
+    hit.point = o + t0 * d;
+    hit.normal = Vector3d::Zero();
+    hit.normal[axis_hit] = d[axis_hit] > 0 ? -1 : 1;
+    const int a = (axis_hit + 1) % 3, b = (axis_hit + 2) % 3;
+    const double c = checker(hit.point[a], hit.point[b], 0.1);
+    hit.color = Vector3d(0.25 + 0.6 * c, 0.2 + 0.3 * (axis_hit == 1), 0.6 - 0.4 * c);
+  }
+};
+
+// Camera to world at time s in [0, 1]: a smooth arc through the room, looking at its middle.
+Eigen::Isometry3d camera_pose(double s) {
+  const double angle = -0.6 + 1.0 * s;
+  const Vector3d eye(1.6 * std::sin(angle), 0.1 * std::sin(3 * s), -1.9 * std::cos(angle) + 0.3 * s);
+  const Vector3d target(0.1 * std::sin(2 * s), 0.8, 0.3);
+  const Vector3d z = (target - eye).normalized();
+  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() << x, z.cross(x), z;
+  pose.translation() = eye;
+  return pose;
+}
+
+}  // namespace
+
+void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
+  if (o.frames < 1 || o.width < 8 || o.height < 8) throw splat::Error("synthetic sequence: bad size or frame count");
+  std::filesystem::create_directories(dir / "rgb");
+  std::filesystem::create_directories(dir / "depth");
+  const Scene scene;
+  const Vector3d light = Vector3d(0.4, -1.0, 0.3).normalized();  // from above (y down)
+  std::vector<StampedPose> truth;
+  std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";
+  const double cx = o.width / 2.0, cy = o.height / 2.0;
+  for (int f = 0; f < o.frames; ++f) {
+    const double timestamp = 1000.0 + f / o.fps;
+    const Eigen::Isometry3d pose = camera_pose(o.frames > 1 ? static_cast<double>(f) / (o.frames - 1) : 0.0);
+    std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
+    splat::Image16 depth(o.width, o.height, 1);
+    for (int y = 0; y < o.height; ++y) {
+      for (int x = 0; x < o.width; ++x) {
+        Vector3d color = Vector3d::Zero();
+        // 2x2 supersampling for colour, the pixel centre for depth.
+        for (int s = 0; s < 5; ++s) {
+          const double sx = s < 4 ? 0.25 + 0.5 * (s % 2) : 0.5, sy = s < 4 ? 0.25 + 0.5 * (s / 2) : 0.5;
+          const Vector3d dir_cam((x + sx - cx) / o.focal, (y + sy - cy) / o.focal, 1.0);
+          Hit hit;
+          scene.intersect(pose.translation(), (pose.linear() * dir_cam).normalized(), hit);
+          if (!std::isfinite(hit.t)) continue;
+          if (s < 4) {
+            color += 0.25 * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
+          } else {
+            const double z = (pose.inverse() * hit.point).z();
+            depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
+          }
+        }
+        for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
+      }
+    }
+    char name[64];
+    std::snprintf(name, sizeof(name), "%.6f.png", timestamp);
+    write_png_rgb(dir / "rgb" / name, o.width, o.height, rgb);
+    write_png_gray16(dir / "depth" / name, depth);
+    rgb_list += std::string(name, name + std::strlen(name) - 4) + " rgb/" + name + "\n";
+    depth_list += std::string(name, name + std::strlen(name) - 4) + " depth/" + name + "\n";
+    truth.push_back({timestamp, pose});
+  }
+  auto write_text = [&](const std::filesystem::path& path, const std::string& text) {
+    write_atomically(path, [&](const std::filesystem::path& tmp) { std::ofstream(tmp) << text; });
+  };
+  write_text(dir / "rgb.txt", rgb_list);
+  write_text(dir / "depth.txt", depth_list);
+  char intrinsics[128];
+  std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", o.focal, o.focal, cx, cy);
+  write_text(dir / "intrinsics.txt", intrinsics);
+  write_tum_trajectory(dir / "groundtruth.txt", truth);
+}
+
+}  // namespace app

@@ -1,0 +1,65 @@
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "splat/error.h"
+
+namespace app {
+
+void write_render_exr(const std::filesystem::path& path, int width, int height,
+                      std::span<const float> rgb, std::span<const float> alpha,
+                      std::span<const float> depth) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  if (width < 1 || height < 1 || rgb.size() != pixels * 3 || alpha.size() != pixels || depth.size() != pixels) {
+    throw splat::Error(path.string() + ": EXR planes do not match " + std::to_string(width) + "x" + std::to_string(height));
+  }
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    try {
+      Imf::Header header(width, height);
+      header.compression() = Imf::ZIP_COMPRESSION;
+      for (const char* name : {"R", "G", "B", "A", "Z"}) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+      Imf::FrameBuffer fb;
+      char* base = reinterpret_cast<char*>(const_cast<float*>(rgb.data()));
+      for (int c = 0; c < 3; ++c) {
+        fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 3 * sizeof(float), 3 * sizeof(float) * width));
+      }
+      fb.insert("A", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(alpha.data())), sizeof(float), sizeof(float) * width));
+      fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth.data())), sizeof(float), sizeof(float) * width));
+      Imf::OutputFile file(tmp.c_str(), header);
+      file.setFrameBuffer(fb);
+      file.writePixels(height);
+    } catch (const std::exception& e) {
+      throw splat::Error(tmp.string() + ": cannot write EXR: " + e.what());
+    }
+  });
+}
+
+ExrImage read_exr(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw splat::Error(path.string() + ": cannot open file");
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    ExrImage image;
+    image.width = window.max.x - window.min.x + 1;
+    image.height = window.max.y - window.min.y + 1;
+    Imf::FrameBuffer fb;
+    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+      auto& plane = image.channels[it.name()];
+      plane.assign(static_cast<std::size_t>(image.width) * image.height, 0.f);
+      char* origin = reinterpret_cast<char*>(plane.data()) -
+                     (static_cast<std::ptrdiff_t>(window.min.y) * image.width + window.min.x) * static_cast<std::ptrdiff_t>(sizeof(float));
+      fb.insert(it.name(), Imf::Slice(Imf::FLOAT, origin, sizeof(float), sizeof(float) * static_cast<std::size_t>(image.width)));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(window.min.y, window.max.y);
+    return image;
+  } catch (const std::exception& e) {
+    throw splat::Error(path.string() + ": cannot read EXR: " + e.what());
+  }
+}
+
+}  // namespace app

@@ -1,0 +1,390 @@
+#include "io/gltf_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include <Eigen/Geometry>
+#include <tiny_gltf.h>
+
+#include "io/atomic_file.h"
+#include "io/file_error.h"
+#include "splat/error.h"
+
+namespace app {
+namespace {
+
+constexpr const char* kExtension = "KHR_gaussian_splatting";
+constexpr const char* kPrefix = "KHR_gaussian_splatting:";
+constexpr double kShC0 = 0.28209479177387814;
+
+double decode_component(const unsigned char* p, int component_type, bool normalized) {
+  auto as = [&](auto v) {
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+  };
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return as(float{});
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      const double v = as(int8_t{});
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: {
+      const double v = as(uint8_t{});
+      return normalized ? v / 255.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      const double v = as(int16_t{});
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      const double v = as(uint16_t{});
+      return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return as(uint32_t{});
+    default: return std::nan("");
+  }
+}
+
+// Decodes accessor `index` into floats, checking its type has `components` per element.
+std::vector<float> read_accessor(const tinygltf::Model& model, int index, int components,
+                                 const std::string& what, const std::filesystem::path& path) {
+  if (index < 0 || index >= static_cast<int>(model.accessors.size())) {
+    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+  }
+  const tinygltf::Accessor& a = model.accessors[static_cast<std::size_t>(index)];
+  const int got = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
+  if (got != components) {
+    fail(path, what + ": accessor " + std::to_string(index) + " has " + std::to_string(got) +
+                   " components, expected " + std::to_string(components));
+  }
+  std::vector<float> out(a.count * static_cast<std::size_t>(components), 0.f);
+  if (a.bufferView < 0) return out;  // glTF: an accessor without a view is all zeros
+  const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(a.bufferView));
+  const tinygltf::Buffer& buffer = model.buffers.at(static_cast<std::size_t>(view.buffer));
+  const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+  if (component_size <= 0) fail(path, what + ": unsupported component type " + std::to_string(a.componentType));
+  const std::size_t element_size = static_cast<std::size_t>(component_size * components);
+  const std::size_t stride = view.byteStride > 0 ? view.byteStride : element_size;
+  const std::size_t start = view.byteOffset + a.byteOffset;
+  if (a.count > 0 && (start + stride * (a.count - 1) + element_size > buffer.data.size() ||
+                      a.byteOffset + stride * (a.count - 1) + element_size > view.byteLength)) {
+    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  }
+  for (std::size_t e = 0; e < a.count; ++e) {
+    for (int c = 0; c < components; ++c) {
+      const double v = decode_component(buffer.data.data() + start + e * stride +
+                                            static_cast<std::size_t>(c * component_size),
+                                        a.componentType, a.normalized);
+      if (!std::isfinite(v)) {
+        fail(path, what + " of splat " + std::to_string(e) + " is " + std::to_string(v) + ", expected a finite value");
+      }
+      out[e * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = static_cast<float>(v);
+    }
+  }
+  return out;
+}
+
+Eigen::Matrix4d node_local_matrix(const tinygltf::Node& node) {
+  if (node.matrix.size() == 16) return Eigen::Map<const Eigen::Matrix4d>(node.matrix.data());
+  Eigen::Affine3d t = Eigen::Affine3d::Identity();
+  if (node.translation.size() == 3) t.translate(Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]));
+  if (node.rotation.size() == 4) t.rotate(Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]));
+  if (node.scale.size() == 3) t.scale(Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]));
+  return t.matrix();
+}
+
+std::string string_or(const tinygltf::Value& obj, const char* key, const std::string& fallback) {
+  if (!obj.IsObject() || !obj.Has(key) || !obj.Get(key).IsString()) return fallback;
+  return obj.Get(key).Get<std::string>();
+}
+
+GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf::Primitive& prim,
+                                    const Eigen::Matrix4d& world, const std::string& name,
+                                    const std::filesystem::path& path,
+                                    std::vector<std::string>& notices) {
+  GltfSplatPrimitive out;
+  out.name = name;
+  const std::string where = "splat primitive '" + name + "'";
+  auto attribute = [&](const std::string& key) -> int {
+    const auto it = prim.attributes.find(key);
+    return it == prim.attributes.end() ? -1 : it->second;
+  };
+  auto required = [&](const std::string& key) {
+    const int index = attribute(key);
+    if (index < 0) fail(path, where + " has no " + key + " attribute");
+    return index;
+  };
+  if (prim.mode != TINYGLTF_MODE_POINTS) fail(path, where + " has mode " + std::to_string(prim.mode) + ", expected 0 (POINTS)");
+  out.positions = read_accessor(model, required("POSITION"), 3, where + " POSITION", path);
+  const std::size_t n = out.positions.size() / 3;
+  out.rotations_xyzw = read_accessor(model, required(std::string(kPrefix) + "ROTATION"), 4, where + " ROTATION", path);
+  out.log_scales = read_accessor(model, required(std::string(kPrefix) + "SCALE"), 3, where + " SCALE", path);
+  out.opacities = read_accessor(model, required(std::string(kPrefix) + "OPACITY"), 1, where + " OPACITY", path);
+  for (const auto& [label, size] : {std::pair{"ROTATION", out.rotations_xyzw.size() / 4},
+                                    {"SCALE", out.log_scales.size() / 3},
+                                    {"OPACITY", out.opacities.size()}}) {
+    if (size != n) fail(path, where + " " + label + " has " + std::to_string(size) + " splats, POSITION has " + std::to_string(n));
+  }
+
+  // SH degree: the highest degree whose coefficients are all present; partial degrees fail.
+  std::vector<std::vector<float>> coeffs;
+  for (int degree = 0; degree <= splat::kMaxShDegree; ++degree) {
+    const int first = degree * degree, count = 2 * degree + 1;
+    int present = 0;
+    for (int c = 0; c < count; ++c) {
+      present += attribute(std::string(kPrefix) + "SH_DEGREE_" + std::to_string(degree) + "_COEF_" + std::to_string(c)) >= 0;
+    }
+    if (present == 0) break;
+    if (present != count) fail(path, where + " defines " + std::to_string(present) + " of the " + std::to_string(count) + " SH degree " + std::to_string(degree) + " coefficients");
+    for (int c = 0; c < count; ++c) {
+      const std::string key = std::string(kPrefix) + "SH_DEGREE_" + std::to_string(degree) + "_COEF_" + std::to_string(c);
+      coeffs.push_back(read_accessor(model, required(key), 3, where + " " + key, path));
+      if (coeffs.back().size() != n * 3) fail(path, where + " " + key + " has the wrong splat count");
+    }
+    out.sh_degree = degree;
+    (void)first;
+  }
+  if (coeffs.empty()) {
+    const int color = attribute("COLOR_0");
+    if (color < 0) fail(path, where + " has neither SH_DEGREE_0_COEF_0 nor COLOR_0");
+    const auto& accessor = model.accessors.at(static_cast<std::size_t>(color));
+    const int components = accessor.type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+    const std::vector<float> rgba = read_accessor(model, color, components, where + " COLOR_0", path);
+    std::vector<float> dc(n * 3);
+    // COLOR_0 holds the diffuse colour SH_0 * C0 + 0.5; invert it.
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) dc[i * 3 + c] = static_cast<float>((rgba[i * components + c] - 0.5) / kShC0);
+    coeffs.push_back(dc);
+    out.sh_from_color0 = true;
+    notices.push_back(where + ": no SH_DEGREE_0_COEF_0, diffuse colour taken from COLOR_0");
+  }
+  const std::size_t k = coeffs.size();
+  out.sh.resize(n * k * 3);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < k; ++c)
+      for (int ch = 0; ch < 3; ++ch) out.sh[(i * k + c) * 3 + ch] = coeffs[c][i * 3 + ch];
+
+  const auto ext_it = prim.extensions.find(kExtension);
+  const tinygltf::Value ext = ext_it == prim.extensions.end() ? tinygltf::Value() : ext_it->second;
+  out.kernel = string_or(ext, "kernel", "ellipse");
+  out.color_space = string_or(ext, "colorSpace", "srgb_rec709_display");
+  if (out.kernel != "ellipse") notices.push_back(where + ": unknown kernel '" + out.kernel + "', rendered as 'ellipse'");
+  if (out.color_space != "srgb_rec709_display" && out.color_space != "lin_rec709_display") {
+    notices.push_back(where + ": unknown colorSpace '" + out.color_space + "', treated as srgb_rec709_display");
+  }
+
+  // Node transform: rotation and uniform scale are folded into the splats.
+  if (!world.isIdentity(1e-12)) {
+    const Eigen::Matrix3d linear = world.topLeftCorner<3, 3>();
+    const double scale = std::cbrt(linear.determinant());
+    const Eigen::Matrix3d rotation = linear / scale;
+    if (!(scale > 0) || (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-5) {
+      fail(path, where + ": node transform is not a rotation with uniform scale");
+    }
+    const Eigen::Quaterniond node_q(rotation);
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector4d p(out.positions[i * 3], out.positions[i * 3 + 1], out.positions[i * 3 + 2], 1);
+      const Eigen::Vector4d q_world = world * p;
+      for (int a = 0; a < 3; ++a) out.positions[i * 3 + a] = static_cast<float>(q_world[a]);
+      const float* r = &out.rotations_xyzw[i * 4];
+      const Eigen::Quaterniond q = node_q * Eigen::Quaterniond(r[3], r[0], r[1], r[2]);
+      out.rotations_xyzw[i * 4] = static_cast<float>(q.x());
+      out.rotations_xyzw[i * 4 + 1] = static_cast<float>(q.y());
+      out.rotations_xyzw[i * 4 + 2] = static_cast<float>(q.z());
+      out.rotations_xyzw[i * 4 + 3] = static_cast<float>(q.w());
+      for (int a = 0; a < 3; ++a) out.log_scales[i * 3 + a] += static_cast<float>(std::log(scale));
+    }
+  }
+  return out;
+}
+
+void visit_nodes(const tinygltf::Model& model, int index, const Eigen::Matrix4d& parent,
+                 const std::filesystem::path& path, GltfSplatScene& scene, int depth) {
+  if (index < 0 || index >= static_cast<int>(model.nodes.size())) fail(path, "node " + std::to_string(index) + " does not exist");
+  if (depth > 64) fail(path, "node hierarchy deeper than 64 (a cycle?)");
+  const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(index)];
+  const Eigen::Matrix4d world = parent * node_local_matrix(node);
+  if (node.mesh >= 0) {
+    if (node.mesh >= static_cast<int>(model.meshes.size())) fail(path, "node " + std::to_string(index) + " refers to missing mesh " + std::to_string(node.mesh));
+    const tinygltf::Mesh& mesh = model.meshes[static_cast<std::size_t>(node.mesh)];
+    for (const auto& prim : mesh.primitives) {
+      const bool splat = prim.extensions.count(kExtension) > 0 ||
+                         prim.attributes.count(std::string(kPrefix) + "ROTATION") > 0;
+      if (!splat) continue;
+      const std::string name = !node.name.empty() ? node.name : mesh.name;
+      scene.primitives.push_back(decode_primitive(model, prim, world, name, path, scene.notices));
+    }
+  }
+  for (int child : node.children) visit_nodes(model, child, world, path, scene, depth + 1);
+}
+
+}  // namespace
+
+GltfSplatScene read_gltf_splats(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) fail(path, "cannot open file");
+  tinygltf::TinyGLTF loader;
+  tinygltf::Model model;
+  std::string err, warn;
+  const bool binary = path.extension() == ".glb";
+  const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path.string())
+                         : loader.LoadASCIIFromFile(&model, &err, &warn, path.string());
+  if (!ok) {
+    std::string msg = err.empty() ? "malformed glTF" : err;
+    std::replace(msg.begin(), msg.end(), '\n', ' ');
+    fail(path, msg);
+  }
+  GltfSplatScene scene;
+  std::vector<int> roots;
+  if (!model.scenes.empty()) {
+    const int s = model.defaultScene >= 0 ? model.defaultScene : 0;
+    roots = model.scenes.at(static_cast<std::size_t>(s)).nodes;
+  } else {
+    for (int i = 0; i < static_cast<int>(model.nodes.size()); ++i) roots.push_back(i);
+  }
+  for (int root : roots) visit_nodes(model, root, Eigen::Matrix4d::Identity(), path, scene, 0);
+  if (scene.primitives.empty()) fail(path, "has no KHR_gaussian_splatting primitive");
+  return scene;
+}
+
+splat::Gaussians to_gaussians(const GltfSplatScene& scene) {
+  splat::Gaussians g;
+  std::size_t total = 0;
+  for (const auto& p : scene.primitives) {
+    g.sh_degree = std::max(g.sh_degree, p.sh_degree);
+    total += p.opacities.size();
+  }
+  g.resize(total);
+  const std::size_t k = static_cast<std::size_t>(splat::sh_coeff_count(g.sh_degree));
+  std::size_t o = 0;
+  for (const auto& p : scene.primitives) {
+    const std::size_t pk = static_cast<std::size_t>(splat::sh_coeff_count(p.sh_degree));
+    for (std::size_t i = 0; i < p.opacities.size(); ++i, ++o) {
+      for (int a = 0; a < 3; ++a) {
+        g.means[o * 3 + a] = p.positions[i * 3 + a];
+        g.log_scales[o * 3 + a] = p.log_scales[i * 3 + a];
+      }
+      const float* r = &p.rotations_xyzw[i * 4];
+      g.rotations[o * 4] = r[3];
+      g.rotations[o * 4 + 1] = r[0];
+      g.rotations[o * 4 + 2] = r[1];
+      g.rotations[o * 4 + 3] = r[2];
+      const double opacity = std::clamp(static_cast<double>(p.opacities[i]), 1e-6, 1 - 1e-6);
+      g.opacity_logits[o] = static_cast<float>(std::log(opacity / (1 - opacity)));
+      for (std::size_t c = 0; c < pk * 3; ++c) g.sh[o * k * 3 + c] = p.sh[i * pk * 3 + c];
+    }
+  }
+  return g;
+}
+
+namespace {
+
+// Appends raw floats as a buffer view plus an accessor; returns the accessor index.
+int add_float_accessor(tinygltf::Model& model, const std::vector<float>& data, int type, std::size_t count,
+                       bool with_bounds) {
+  tinygltf::Buffer& buffer = model.buffers[0];
+  const std::size_t offset = buffer.data.size();
+  buffer.data.resize(offset + data.size() * sizeof(float));
+  std::memcpy(buffer.data.data() + offset, data.data(), data.size() * sizeof(float));
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = offset;
+  view.byteLength = data.size() * sizeof(float);
+  view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+  model.bufferViews.push_back(view);
+  tinygltf::Accessor accessor;
+  accessor.bufferView = static_cast<int>(model.bufferViews.size() - 1);
+  accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  accessor.count = count;
+  accessor.type = type;
+  if (with_bounds && count > 0) {  // glTF requires min/max on POSITION
+    const int comps = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(type));
+    accessor.minValues.assign(static_cast<std::size_t>(comps), INFINITY);
+    accessor.maxValues.assign(static_cast<std::size_t>(comps), -INFINITY);
+    for (std::size_t i = 0; i < count; ++i)
+      for (int c = 0; c < comps; ++c) {
+        const double v = data[i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(c)];
+        accessor.minValues[static_cast<std::size_t>(c)] = std::min(accessor.minValues[static_cast<std::size_t>(c)], v);
+        accessor.maxValues[static_cast<std::size_t>(c)] = std::max(accessor.maxValues[static_cast<std::size_t>(c)], v);
+      }
+  }
+  model.accessors.push_back(accessor);
+  return static_cast<int>(model.accessors.size() - 1);
+}
+
+}  // namespace
+
+void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
+  splat::validate(splat::GaussiansView(g), "write_gltf " + path.string());
+  const std::size_t n = g.size();
+  const std::size_t k = static_cast<std::size_t>(splat::sh_coeff_count(g.sh_degree));
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "gslam";
+  model.extensionsUsed = {kExtension};
+  model.buffers.resize(1);
+
+  std::vector<float> rotations(n * 4), opacities(n), colors(n * 4);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* q = &g.rotations[i * 4];
+    double norm = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2] + double(q[3]) * q[3]);
+    if (norm == 0) norm = 1;  // a zero quaternion stays zero (the renderer culls it)
+    rotations[i * 4] = static_cast<float>(q[1] / norm);
+    rotations[i * 4 + 1] = static_cast<float>(q[2] / norm);
+    rotations[i * 4 + 2] = static_cast<float>(q[3] / norm);
+    rotations[i * 4 + 3] = static_cast<float>(q[0] / norm);
+    const double opacity = 1 / (1 + std::exp(-static_cast<double>(g.opacity_logits[i])));
+    opacities[i] = static_cast<float>(opacity);
+    for (int c = 0; c < 3; ++c) {
+      colors[i * 4 + c] = static_cast<float>(std::clamp(g.sh[i * k * 3 + c] * kShC0 + 0.5, 0.0, 1.0));
+    }
+    colors[i * 4 + 3] = opacities[i];
+  }
+  tinygltf::Primitive prim;
+  prim.mode = TINYGLTF_MODE_POINTS;
+  prim.attributes["POSITION"] = add_float_accessor(model, g.means, TINYGLTF_TYPE_VEC3, n, true);
+  prim.attributes[std::string(kPrefix) + "ROTATION"] = add_float_accessor(model, rotations, TINYGLTF_TYPE_VEC4, n, false);
+  prim.attributes[std::string(kPrefix) + "SCALE"] = add_float_accessor(model, g.log_scales, TINYGLTF_TYPE_VEC3, n, false);
+  prim.attributes[std::string(kPrefix) + "OPACITY"] = add_float_accessor(model, opacities, TINYGLTF_TYPE_SCALAR, n, false);
+  prim.attributes["COLOR_0"] = add_float_accessor(model, colors, TINYGLTF_TYPE_VEC4, n, false);
+  for (int degree = 0; degree <= g.sh_degree; ++degree) {
+    for (int c = 0; c < 2 * degree + 1; ++c) {
+      const std::size_t coeff = static_cast<std::size_t>(degree * degree + c);
+      std::vector<float> values(n * 3);
+      for (std::size_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < 3; ++ch) values[i * 3 + ch] = g.sh[(i * k + coeff) * 3 + ch];
+      prim.attributes[std::string(kPrefix) + "SH_DEGREE_" + std::to_string(degree) + "_COEF_" + std::to_string(c)] =
+          add_float_accessor(model, values, TINYGLTF_TYPE_VEC3, n, false);
+    }
+  }
+  tinygltf::Value::Object ext;
+  ext["kernel"] = tinygltf::Value(std::string("ellipse"));
+  ext["colorSpace"] = tinygltf::Value(std::string("srgb_rec709_display"));
+  ext["projection"] = tinygltf::Value(std::string("perspective"));
+  ext["sortingMethod"] = tinygltf::Value(std::string("cameraDistance"));
+  prim.extensions[kExtension] = tinygltf::Value(ext);
+  tinygltf::Mesh mesh;
+  mesh.name = "gaussians";
+  mesh.primitives.push_back(prim);
+  model.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.mesh = 0;
+  node.name = "gaussians";
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes = {0};
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+
+  const bool binary = path.extension() != ".gltf";
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    tinygltf::TinyGLTF writer;
+    if (!writer.WriteGltfSceneToFile(&model, tmp.string(), /*embedImages=*/true,
+                                     /*embedBuffers=*/true, /*prettyPrint=*/!binary, binary)) {
+      fail(tmp, "cannot write glTF");
+    }
+  });
+}
+
+}  // namespace app

@@ -1,0 +1,42 @@
+// Every setting of the SLAM system in one struct. Each default is written once, at its
+// declaration here or in TrackingConfig / MapperConfig; docs/tuning.md holds how they were chosen.
+#pragma once
+#include "mapping/mapper.h"
+#include "tracking/tracker.h"
+
+namespace app {
+
+struct SlamConfig {
+  tracking::TrackingConfig tracking;
+  mapping::MapperConfig mapping;
+  // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
+  // since the last keyframe.
+  int keyframe_every = 5;
+  double keyframe_translation = 0.05;  // metres
+  double keyframe_rotation_deg = 5.0;
+  // A frame whose tracking failed is retried once from the last pose with this many first-order
+  // warm-up steps (TrackingConfig::warmup_iterations), whose basin is wider.
+  int retry_warmup_iterations = 20;
+  // After the last frame (offline runs) the map is swept over the tracked frames this many times
+  // in shuffled order, `refine_iterations` map steps per visit: the bounded mapping window lets
+  // later keyframes degrade what earlier ones saw.
+  int refine_passes = 12;
+  int refine_iterations = 1;  // more steps per visit at the same rates rendered worse
+  // Sweep every tracked frame (true) or the keyframes alone: more viewpoints for the same steps.
+  bool refine_all_frames = true;
+  // The first this many passes also densify each visited frame, covering what no keyframe saw.
+  int refine_densify_passes = 1;
+  // Swept frames (at the refinement resolution) stay in memory up to this many MiB; the rest are
+  // reloaded on every visit (teddy's 193 frames take 237 MiB; a reload costs 9 ms).
+  double refine_cache_mib = 512;
+  // Then re-track every refined frame but the first against the final map, from its current
+  // pose, with this many Levenberg-Marquardt iterations at the finest tracking level (0: off,
+  // as it cost 0.2 frames/s on teddy for a worse ATE).
+  int relocalize_iterations = 0;
+
+  // Throws splat::Error naming the first field out of range ("mapping.window: expected an
+  // integer >= 1, got 0"), tracking and mapping fields included.
+  void validate() const;
+};
+
+}  // namespace app

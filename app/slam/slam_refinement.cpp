@@ -1,0 +1,75 @@
+// SlamSystem's final sweep: the map refined over the tracked frames after the last one.
+#include <algorithm>
+#include <optional>
+#include <random>
+
+#include "slam/slam_system.h"
+#include "tracking/tracker.h"
+
+namespace app {
+
+std::vector<std::size_t> SlamSystem::refine_frames() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::size_t> frames;
+  for (std::size_t i = 0; i < frames_.size(); ++i) {
+    if (frames_[i].is_keyframe || (config_.refine_all_frames && frames_[i].tracked)) frames.push_back(i);
+  }
+  return frames;
+}
+
+SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,
+                                              const std::function<void(std::size_t, std::size_t)>& visited) {
+  finish();  // the mapper is this thread's from here on
+  Refinement result;
+  const std::vector<std::size_t> frames = refine_frames();
+  result.frames = frames.size();
+  if (config_.refine_passes <= 0 || frames.empty()) return result;
+  std::vector<Eigen::Isometry3d> T_world_cam = trajectory();
+  std::vector<mapping::PoseAdam> poses(T_world_cam.size());
+  std::vector<std::size_t> order = frames;
+  std::mt19937 rng(1);
+  const std::size_t total = frames.size() * static_cast<std::size_t>(config_.refine_passes);
+  // Frames kept in memory (bounded by refine_cache_mib), the others reloaded on each visit.
+  std::vector<std::optional<splat::RgbdFrame>> cache(T_world_cam.size());
+  splat::RgbdFrame uncached;
+  double cached_mib = 0;
+  auto frame_at = [&](std::size_t i) -> const splat::RgbdFrame& {
+    if (cache[i]) return *cache[i];
+    splat::RgbdFrame f = mapper_.refinement_frame(load(i));
+    const double mib = static_cast<double>((f.rgb.size() + f.depth.size()) * sizeof(float)) / (1 << 20);
+    if (cached_mib + mib > config_.refine_cache_mib) return uncached = std::move(f);
+    cached_mib += mib;
+    return *(cache[i] = std::move(f));
+  };
+  for (int pass = 0; pass < config_.refine_passes; ++pass) {
+    std::shuffle(order.begin(), order.end(), rng);
+    for (const std::size_t i : order) {
+      Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
+      mapper_.refine(frame_at(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations,
+                     pass < config_.refine_densify_passes);
+      T_world_cam[i] = T_cam_world.inverse();
+      if (visited) visited(++result.visits, total);
+    }
+  }
+  result.pruned = mapper_.prune();
+  if (config_.relocalize_iterations > 0) {
+    tracking::TrackingConfig t = config_.tracking;
+    t.pyramid = {t.pyramid.back()};
+    t.iterations = {config_.relocalize_iterations};
+    t.warmup_iterations = 0;
+    for (const std::size_t i : frames) {
+      if (i == 0) continue;  // the world frame
+      const tracking::TrackingResult r =
+          tracking::track_frame(tracking_rasterizer_, mapper_.map(), load(i), T_world_cam[i].inverse(), t);
+      if (r.converged) T_world_cam[i] = r.T_cam_world.inverse();
+    }
+  }
+  auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
+  std::lock_guard lock(mutex_);
+  map_ = std::move(snapshot);
+  // The refined frames keep their keyframe, at the pose the sweep gave them.
+  for (const std::size_t i : frames) frames_[i].T_keyframe_cam = keyframe_world_[frames_[i].keyframe].inverse() * T_world_cam[i];
+  return result;
+}
+
+}  // namespace app

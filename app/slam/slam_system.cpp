@@ -1,0 +1,183 @@
+#include "slam/slam_system.h"
+
+#include <chrono>
+
+#include "slam/elapsed.h"
+#include "splat/error.h"
+
+namespace app {
+
+SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
+    : config_((config.validate(), config)),
+      tracking_rasterizer_(rasterizer),
+      tracker_(rasterizer, config_),
+      mapper_(rasterizer, config_.mapping),
+      threaded_(false) {}
+
+SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer& mapping_rasterizer,
+                       const SlamConfig& config)
+    : config_((config.validate(), config)),
+      tracking_rasterizer_(tracking_rasterizer),
+      tracker_(tracking_rasterizer, config_),
+      mapper_(mapping_rasterizer, config_.mapping),
+      threaded_(true) {
+  if (&tracking_rasterizer == &mapping_rasterizer) {
+    throw splat::Error("SlamSystem: threaded mapping needs a rasterizer of its own, got the tracking one");
+  }
+}
+
+SlamSystem::~SlamSystem() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+    pending_.reset();
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::shared_ptr<const splat::Gaussians> SlamSystem::map() const {
+  std::lock_guard lock(mutex_);
+  return map_;
+}
+
+Eigen::Isometry3d SlamSystem::pose_of(const FramePose& frame) const {
+  return keyframe_world_[frame.keyframe] * frame.T_keyframe_cam;
+}
+
+std::vector<Eigen::Isometry3d> SlamSystem::trajectory() const {
+  std::lock_guard lock(mutex_);
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(frames_.size());
+  for (const FramePose& f : frames_) poses.push_back(pose_of(f));
+  return poses;
+}
+
+std::size_t SlamSystem::keyframes() const {
+  std::lock_guard lock(mutex_);
+  return keyframe_world_.size();
+}
+
+MappingTotals SlamSystem::mapping_totals() const {
+  std::lock_guard lock(mutex_);
+  return totals_;
+}
+
+mapping::Vignetting SlamSystem::vignetting() const {
+  std::lock_guard lock(mutex_);
+  return mapper_.vignetting();
+}
+
+void SlamSystem::rethrow_mapping_error() {
+  std::lock_guard lock(mutex_);
+  if (error_) std::rethrow_exception(error_);
+}
+
+double SlamSystem::map_keyframe(const KeyframeJob& job) {
+  const auto start = std::chrono::steady_clock::now();
+  mapper_keyframes_.push_back(job.keyframe);  // the mapper numbers keyframes in the order added
+  const mapping::MappingStats stats = mapper_.add_keyframe(job.frame, job.T_world_cam.inverse());
+  auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
+  const auto poses = mapper_.keyframe_poses();
+  const double ms = ms_since(start);
+  std::lock_guard lock(mutex_);
+  for (const auto& [number, T_cam_world] : poses) keyframe_world_[mapper_keyframes_[number]] = T_cam_world.inverse();
+  map_ = std::move(snapshot);
+  ++totals_.keyframes_mapped;
+  totals_.gaussians_added += stats.added;
+  totals_.gaussians_pruned += stats.pruned;
+  totals_.iterations += static_cast<std::size_t>(stats.iterations);
+  totals_.last_loss = stats.final_loss;
+  totals_.mapping_ms += ms;
+  return ms;
+}
+
+FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
+  rethrow_mapping_error();
+  FrameRecord record;
+  if (!tracker_.started()) {
+    record.timestamp = frame.timestamp;
+    record.keyframe = true;
+    tracker_.start(frame.timestamp);
+  } else {
+    const std::shared_ptr<const splat::Gaussians> map = this->map();
+    record = tracker_.track(*map, frame);
+    if (tracker_.wants_keyframe(record)) {
+      record.keyframe = true;
+      tracker_.keyframe_added(record.T_world_cam);
+    }
+  }
+  std::optional<KeyframeJob> job;
+  {
+    std::lock_guard lock(mutex_);
+    if (record.keyframe) {
+      job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size()};
+      keyframe_world_.push_back(record.T_world_cam);
+    }
+  }
+  // The first keyframe seeds the map before anything is tracked against it.
+  if (job && (!threaded_ || job->keyframe == 0)) {
+    record.mapping_ms = map_keyframe(*job);
+    if (threaded_) thread_ = std::thread([this] { mapping_loop(); });
+  } else if (job) {
+    {
+      std::lock_guard lock(mutex_);
+      if (pending_) ++totals_.keyframes_skipped;  // mapping fell behind: the newer one replaces it
+      pending_ = std::move(job);
+    }
+    wake_.notify_one();
+  }
+  std::lock_guard lock(mutex_);
+  const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
+  // Relative to the keyframe as known now (sequential: after mapping moved it).
+  frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
+                     record.tracked, record.keyframe});
+  record.gaussians = map_->size();
+  return record;
+}
+
+void SlamSystem::mapping_loop() {
+  for (;;) {
+    KeyframeJob job;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait(lock, [&] { return stop_ || pending_.has_value(); });
+      if (stop_ && !pending_) return;
+      job = std::move(*pending_);
+      pending_.reset();
+      busy_ = true;
+    }
+    try {
+      map_keyframe(job);
+    } catch (...) {
+      std::lock_guard lock(mutex_);
+      error_ = std::current_exception();
+    }
+    {
+      std::lock_guard lock(mutex_);
+      busy_ = false;
+    }
+    idle_.notify_all();
+  }
+}
+
+void SlamSystem::wait_for_mapping() {
+  {
+    std::unique_lock lock(mutex_);
+    idle_.wait(lock, [&] { return (!pending_ && !busy_) || !thread_.joinable(); });
+  }
+  rethrow_mapping_error();
+}
+
+void SlamSystem::finish() {
+  wait_for_mapping();
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  rethrow_mapping_error();
+}
+
+}  // namespace app

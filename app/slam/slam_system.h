@@ -1,0 +1,122 @@
+// RGB-D SLAM: each frame is tracked against the map; keyframes extend and refine the map; after
+// the last frame an offline run may sweep the map over every tracked frame. One object serves
+// both ways of running it:
+// - sequential (`gslam reconstruct`): each keyframe is mapped inside process(), before the next
+//   frame is tracked, so a run is deterministic;
+// - threaded (`gslam live`): mapping runs on a thread of its own with its own rasterizer.
+//   Keyframes wait in a one-slot queue; a newer keyframe replaces a waiting one (counted as
+//   skipped), so tracking never waits for mapping and memory stays bounded.
+// Frames whose tracking failed never become keyframes, so a bad pose does not corrupt the map.
+// The system owns every pose: each frame is held relative to the keyframe it followed, and
+// keyframes move as mapping refines them, carrying their frames along, in both modes.
+#pragma once
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "mapping/mapper.h"
+#include "slam/frame_tracker.h"
+#include "slam/slam_config.h"
+#include "splat/rasterizer.h"
+#include "splat/rgbd_frame.h"
+
+namespace app {
+
+// What mapping did over a run.
+struct MappingTotals {
+  std::size_t keyframes_mapped = 0;
+  std::size_t keyframes_skipped = 0;  // threaded: replaced in the queue by a newer keyframe
+  std::size_t gaussians_added = 0, gaussians_pruned = 0;
+  std::size_t iterations = 0;
+  double last_loss = 0;  // the last window step's loss
+  double mapping_ms = 0;
+};
+
+class SlamSystem {
+ public:
+  // Sequential: tracking and mapping take turns on `rasterizer`.
+  SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config);
+  // Threaded: mapping renders with `mapping_rasterizer`, which must differ from
+  // `tracking_rasterizer` (each thread renders with its own).
+  SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer& mapping_rasterizer,
+             const SlamConfig& config);
+  ~SlamSystem();  // stops the mapping thread; a keyframe still waiting is dropped
+  SlamSystem(const SlamSystem&) = delete;
+  SlamSystem& operator=(const SlamSystem&) = delete;
+
+  // Tracks the frame (the first one defines the world frame and seeds the map, synchronously in
+  // either mode) and maps it when it becomes a keyframe. Rethrows an error of the mapping thread.
+  FrameRecord process(const splat::RgbdFrame& frame);
+  // Threaded: returns once no keyframe waits or is being mapped. Rethrows a mapping error.
+  void wait_for_mapping();
+  // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.
+  void finish();
+
+  // The map as last mapped (never null after the first frame; shared, so a reader keeps it).
+  std::shared_ptr<const splat::Gaussians> map() const;
+  // Camera-to-world poses of every frame processed so far, with the keyframes' corrections.
+  std::vector<Eigen::Isometry3d> trajectory() const;
+  std::size_t keyframes() const;  // frames that became keyframes (mapped or skipped)
+  MappingTotals mapping_totals() const;
+  // The camera's vignetting as the final refinement estimated it (none before).
+  mapping::Vignetting vignetting() const;
+
+  // The frames refine_map() visits, by frame index: the keyframes, or every tracked frame with
+  // refine_all_frames.
+  std::vector<std::size_t> refine_frames() const;
+  struct Refinement {
+    std::size_t frames = 0, visits = 0, pruned = 0;
+  };
+  // The final sweep (SlamConfig::refine_passes) over refine_frames(), each loaded with
+  // load(frame index) and kept while refine_cache_mib allows, in a shuffled order that is the
+  // same on every run; the first passes densify (refine_densify_passes). Visited frames but the
+  // first (the world frame) move with the map (MapperConfig::refine_pose_rate_scale), and
+  // trajectory() returns the moved poses. Then prunes, and re-tracks where
+  // relocalize_iterations > 0. Finishes mapping first. Calls visited(done, total) after each visit.
+  Refinement refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,
+                        const std::function<void(std::size_t, std::size_t)>& visited = {});
+
+ private:
+  // A frame's pose relative to the keyframe it followed (or itself).
+  struct FramePose {
+    std::size_t keyframe;
+    Eigen::Isometry3d T_keyframe_cam;
+    bool tracked, is_keyframe;
+  };
+  struct KeyframeJob {
+    splat::RgbdFrame frame;
+    Eigen::Isometry3d T_world_cam;
+    std::size_t keyframe;  // its number among the system's keyframes
+  };
+  // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
+  double map_keyframe(const KeyframeJob& job);
+  void mapping_loop();
+  void rethrow_mapping_error();
+  Eigen::Isometry3d pose_of(const FramePose& frame) const;  // caller holds mutex_
+
+  const SlamConfig config_;
+  splat::Rasterizer& tracking_rasterizer_;
+  FrameTracker tracker_;
+  mapping::Mapper mapper_;  // the mapping thread's alone while it runs
+  const bool threaded_;
+  std::vector<std::size_t> mapper_keyframes_;  // the system's keyframe number per mapper number
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::vector<Eigen::Isometry3d> keyframe_world_;  // T_world_cam per keyframe number
+  std::vector<FramePose> frames_;
+  std::shared_ptr<const splat::Gaussians> map_;
+  MappingTotals totals_;
+  std::optional<KeyframeJob> pending_;
+  bool busy_ = false, stop_ = false;
+  std::exception_ptr error_;
+  std::condition_variable wake_, idle_;
+  std::thread thread_;
+};
+
+}  // namespace app

@@ -1,0 +1,23 @@
+// The viewer of a build without GLFW/OpenGL: `gslam live` then needs --headless.
+#include "viewer/viewer_window.h"
+#include "splat/error.h"
+
+namespace app {
+
+struct ViewerWindow::State {};
+
+bool viewer_built() { return false; }
+
+ViewerWindow::ViewerWindow(const std::string&) {
+  throw splat::Error(
+      "viewer: this build has no viewer (apt-get install libglfw3-dev libgl-dev); use --headless");
+}
+ViewerWindow::~ViewerWindow() = default;
+void ViewerWindow::show(const splat::Image8&, const std::string&, splat::Image8*) {}
+void ViewerWindow::poll() {}
+bool ViewerWindow::closed() const { return true; }
+bool ViewerWindow::paused() const { return false; }
+bool ViewerWindow::take_snapshot_request() { return false; }
+ViewCamera ViewerWindow::view() const { return {}; }
+
+}  // namespace app
