@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <random>
 
-#include "app/ply_io.h"
-#include "app/views.h"
+#include "io/ply_io.h"
+#include "viewer/views.h"
 
 namespace gslam::bench {
 
