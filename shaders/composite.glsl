@@ -31,19 +31,23 @@ Splat load_splat(uint id) {
   return s;
 }
 
-// exp(x) for x <= 0 with the CPU reference's polynomial (Cephes, ~2 ulp), so both backends
-// round alpha alike near the kAlphaMin and kTransmittanceMin cut-offs.
+// The per-pixel maths, operation for operation as the CPU backend's (splat/src/cpu/
+// composite_common.h, built without contraction): plain multiplies and adds marked `precise`,
+// so no compiler fuses or reorders them and each is correctly rounded on every Vulkan device;
+// alpha then agrees bit for bit with the CPU (tests/splat/composite_oracle_test.cpp). No fma():
+// lavapipe computes it as a multiply and an add, NVIDIA as one operation.
+//
+// exp(x) for x <= 0: 2^n e^r, n = x / ln 2 rounded to nearest (ties to even), r = x - n ln 2
+// with Cephes' two-part ln 2, e^r by a degree-5 minimax polynomial (about 2 ulp).
 float exp_nonpositive(float x) {
-  x = max(x, -87.0);
-  float n = floor(x * 1.44269504088896341 + 0.5);
-  float r = x - n * 0.693359375 + n * 2.12194440e-4;
-  float p = 1.9875691500e-4;
-  p = p * r + 1.3981999507e-3;
-  p = p * r + 8.3334519073e-3;
-  p = p * r + 4.1665795894e-2;
-  p = p * r + 1.6666665459e-1;
-  p = p * r + 5.0000001201e-1;
-  p = p * r * r + r + 1.0;
+  precise float y = max(x, -87.0);
+  precise float n = roundEven(y * 1.44269504088896341);
+  precise float r = y - n * 0.693359375 + n * 2.12194440e-4;
+  precise float p = r * 8.290324360e-3 + 4.189795256e-2;
+  p = p * r + 1.666763574e-1;
+  p = p * r + 4.999915063e-1;
+  p = p * r + 9.999997020e-1;
+  p = p * r + 1.0;
   return p * intBitsToFloat((int(n) + 127) << 23);
 }
 
@@ -53,14 +57,23 @@ struct PixelEval {
   float raw_alpha;  // before the cap
 };
 
+// sigma = dx (a/2 dx + b dy) + c/2 dy^2, (dx, dy) = mean - pixel centre.
 PixelEval eval_pixel(Splat s, vec2 pixel_centre) {
   PixelEval e;
-  e.dx = s.mean.x - pixel_centre.x;
-  e.dy = s.mean.y - pixel_centre.y;
-  e.sigma = 0.5 * (s.conic.x * e.dx * e.dx + s.conic.z * e.dy * e.dy) + s.conic.y * e.dx * e.dy;
-  e.gauss = exp_nonpositive(-max(e.sigma, 0.0));
-  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : 0.0;
-  e.alpha = min(kAlphaMax, e.raw_alpha);
+  precise float dx = s.mean.x - pixel_centre.x;
+  precise float dy = s.mean.y - pixel_centre.y;
+  precise float a_dx = (0.5 * s.conic.x) * dx;
+  precise float b_dy = s.conic.y * dy;
+  precise float c_dy2 = ((0.5 * s.conic.z) * dy) * dy;
+  precise float sigma = dx * (a_dx + b_dy) + c_dy2;
+  precise float gauss = exp_nonpositive(-sigma);
+  precise float raw_alpha = sigma >= 0 ? s.opacity * gauss : 0.0;
+  e.dx = dx;
+  e.dy = dy;
+  e.sigma = sigma;
+  e.gauss = gauss;
+  e.raw_alpha = raw_alpha;
+  e.alpha = min(kAlphaMax, raw_alpha);
   return e;
 }
 

@@ -3,7 +3,7 @@
 // intersections' slots (in tile order, no atomics) and propagates them to the map parameters.
 // Its contribution to dL/dW and dL/dt of p_cam = W p + t is summed per workgroup in a fixed
 // tree and written to pose_partials[workgroup]; the host adds those in double. Reads 0..12,
-// writes 13..16. Deterministic.
+// writes 13..15. Deterministic.
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 
@@ -18,9 +18,7 @@ layout(std430, binding = 12) readonly buffer IsectGrads { float isect_grads[]; }
 // dL/d(means 3, log_scales 3, rotations 4, opacity logit 1) per Gaussian.
 layout(std430, binding = 13) writeonly buffer DParams { float d_params[]; };  // [N, 11]
 layout(std430, binding = 14) writeonly buffer DSh { float d_sh[]; };          // [N, K, 3]
-// dL/d(2D mean) and whether the Gaussian was visible (1 or 0).
-layout(std430, binding = 15) writeonly buffer DScreen { float d_screen[]; };  // [N, 3]
-layout(std430, binding = 16) writeonly buffer PosePartials { float pose_partials[]; };  // [groups, 12]
+layout(std430, binding = 15) writeonly buffer PosePartials { float pose_partials[]; };  // [groups, 12]
 
 shared float reduction[kPosePartials][kGroupSize];
 
@@ -107,9 +105,6 @@ void main() {
       d_params[i * 11u + 3u + k] = v_log_scale[k];
     }
     for (uint k = 0u; k < 4u; ++k) d_params[i * 11u + 6u + k] = v_q[k];
-    d_screen[3 * i] = sg[kSlotMeanX];
-    d_screen[3 * i + 1] = sg[kSlotMeanY];
-    d_screen[3 * i + 2] = visible ? 1.0 : 0.0;
   }
   // Workgroup sum of dL/dW (row-major) and dL/dt, in a fixed tree.
   for (uint r = 0u; r < 3u; ++r) {

@@ -25,9 +25,9 @@ void main() {
   vec2 centre = vec2(pixel) + 0.5;
   uint tile = tile_index();
   uint begin = tile_ranges[2 * tile], end = tile_ranges[2 * tile + 1];
-  float t = 1.0;
-  vec3 rgb = vec3(0);
-  float z = 0;
+  precise float t = 1.0;
+  precise vec3 rgb = vec3(0);
+  precise float z = 0;
   uint last = 0;
   bool done = !inside;  // pixels past the image edge never hold the tile open
   if (tid == 0u) finished = 0u;
@@ -43,13 +43,13 @@ void main() {
       Splat sp = batch[k];
       PixelEval e = eval_pixel(sp, centre);
       if (e.alpha < kAlphaMin) continue;
-      float next_t = t * (1.0 - e.alpha);
+      precise float next_t = t * (1.0 - e.alpha);
       if (next_t <= kTransmittanceMin) {
         done = true;
         atomicAdd(finished, 1u);
         break;
       }
-      float weight = e.alpha * t;
+      precise float weight = e.alpha * t;
       rgb += weight * sp.color;
       z += weight * sp.depth;
       t = next_t;
@@ -59,11 +59,11 @@ void main() {
   if (!inside) return;
   uint o = pixel.y * frame.width + pixel.x;
   vec3 bg = vec3(frame.background[0], frame.background[1], frame.background[2]);
-  vec3 c = rgb + t * bg;
+  precise vec3 c = rgb + t * bg;
   out_rgb[3 * o] = c.r;
   out_rgb[3 * o + 1] = c.g;
   out_rgb[3 * o + 2] = c.b;
-  float a = 1.0 - t;
+  precise float a = 1.0 - t;
   out_alpha[o] = a;
   out_depth[o] = z;
   out_depth_normalized[o] = a > 0 ? z / a : 0.0;

@@ -12,8 +12,9 @@
 
 namespace app {
 int run_reconstruct(const ReconstructOptions& o) {
+  const SlamConfig config = load_slam_config(o.config);  // first: a bad file costs nothing
   if (o.print_config) {
-    std::printf("%s\n", slam_config_to_json(load_slam_config(o.config)).dump(2).c_str());
+    std::printf("%s\n", slam_config_to_json(config).dump(2).c_str());
     return 0;
   }
   if (o.out.empty()) throw splat::Error("reconstruct: --out is required");
@@ -25,7 +26,6 @@ int run_reconstruct(const ReconstructOptions& o) {
     write_synthetic_sequence(input, SyntheticOptions{});
   }
   const Dataset dataset = open_dataset(input, o.dataset_options);
-  const SlamConfig config = load_slam_config(o.config);
   std::fprintf(stderr, "dataset %s (%s): %zu frames at %dx%d%s", input.c_str(), dataset.format.c_str(),
                dataset.entries.size(), dataset.intrinsics.width, dataset.intrinsics.height,
                dataset.has_ground_truth() ? ", with ground truth" : "");

@@ -142,3 +142,27 @@ TEST(CliReconstruct, SyntheticDefaultWritesEveryOutputAndEvalReadsThem) {
 }
 
 }  // namespace
+
+namespace {
+
+// `--print-config` writes every setting; given back as `--config` it prints the same again, and
+// a config with an error stops reconstruct with a one-line message naming the key.
+TEST(CliReconstruct, PrintedConfigReadsBackAndBadConfigIsRefusedByName) {
+  TempDir dir;
+  const RunResult printed = run_gslam("reconstruct --print-config");
+  ASSERT_EQ(printed.exit_code, 0) << printed.output;
+  const nlohmann::json config = nlohmann::json::parse(printed.output);
+  EXPECT_EQ(config.at("refine_passes").get<int>(), 12);
+  EXPECT_EQ(config.at("mapping").at("iterations").get<int>(), 45);
+  gslam::test::write_text(dir / "printed.json", printed.output);
+  const RunResult again = run_gslam("reconstruct --print-config --config " + (dir / "printed.json").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(nlohmann::json::parse(again.output), config);
+  gslam::test::write_text(dir / "bad.json", R"({"mapping": {"window": 3.7}})");
+  const RunResult bad = run_gslam("reconstruct --out " + (dir / "run").string() + " --config " + (dir / "bad.json").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("mapping.window: expected an integer"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "run" / "trajectory.txt")) << "nothing runs on a bad config";
+}
+
+}  // namespace

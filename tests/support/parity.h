@@ -8,8 +8,8 @@
 namespace gslam::test {
 
 // Images (RGB, alpha, depth): every pixel within this absolute bound (the target).
-// Both backends use the same exp polynomial and cut-offs; what remains is float summation
-// order and fused multiply-adds, ~1e-6 on these scenes.
+// Compositing is bit-identical given the same splats (composite_oracle_test.cpp); what remains
+// is projection's division and square root on the GPU, ~1e-6 on these scenes.
 inline constexpr float kImageParity = 1e-4f;
 // Gradients and Jacobians: relative error bound on each element, measured against
 // |reference| + kRelativeFloor x (largest |reference| of its group), so near-cancelling

@@ -92,6 +92,11 @@ TEST_F(DonutTracking, ConvergesFromThreeCentimetresAndTwoDegrees) {
   ASSERT_GT(before.translation_m, 0.029);
   tracking::TrackingConfig config;
   config.warmup_iterations = 20;  // 3 cm is ~35 px here: wider than Gauss-Newton's basin
+  // Sub-millimetre needs the full-resolution level and steps that end below 0.01 mm (the SLAM
+  // defaults stop at half resolution and 0.3 mm, which the map's noise does not resolve anyway).
+  config.pyramid = {4, 2, 1};
+  config.iterations = {10, 8, 6};
+  config.min_step_translation = config.min_step_rotation = 1e-5;
   expect_converges(start, config, "3 cm / 2 deg");
 }
 

@@ -14,7 +14,6 @@ struct Camera {
   Eigen::Isometry3d T_cam_world = Eigen::Isometry3d::Identity();
   double near = 0.01, far = 1e10;  // metres; splats with camera z outside are culled
 
-  Eigen::Vector3d position_world() const { return T_cam_world.inverse().translation(); }
   // Throws splat::Error naming `where` for non-positive or non-finite intrinsics, an image
   // size outside 1..16384, near/far out of order, or a pose that is not finite and rigid.
   void validate(std::string_view where) const;

@@ -100,9 +100,6 @@ template <typename Scalar>
 struct BackwardResultT {
   GaussianGradsT<Scalar> d_gaussians;  // mirrors the input map, field for field
   PoseGradient d_loss_d_pose = PoseGradient::Zero();
-  // What densification needs: dL/d(2D mean) per Gaussian [N, 2] and whether it was visible [N].
-  std::vector<Scalar> d_means2d;
-  std::vector<uint8_t> visible;
 };
 using BackwardResult = BackwardResultT<float>;
 

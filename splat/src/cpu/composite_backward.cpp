@@ -146,14 +146,14 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           const V v_alpha = (sp.r * t - br * inv) * vr + (sp.g * t - bgr * inv) * vg +
                             (sp.b * t - bb * inv) * vb + (sp.z * t - bz * inv) * vz + vf * inv;
           V* grads = chunk_grads[k];
-          grads[kR] += weight * vr;
-          grads[kG] += weight * vg;
-          grads[kB] += weight * vb;
-          grads[kZ] += weight * vz;
-          br += weight * sp.r;
-          bgr += weight * sp.g;
-          bb += weight * sp.b;
-          bz += weight * sp.z;
+          grads[kR] = fma_lanes(weight, vr, grads[kR]);
+          grads[kG] = fma_lanes(weight, vg, grads[kG]);
+          grads[kB] = fma_lanes(weight, vb, grads[kB]);
+          grads[kZ] = fma_lanes(weight, vz, grads[kZ]);
+          br = fma_lanes(weight, sp.r, br);
+          bgr = fma_lanes(weight, sp.g, bgr);
+          bb = fma_lanes(weight, sp.b, bb);
+          bz = fma_lanes(weight, sp.z, bz);
           t_row = t;
           // alpha = min(kAlphaMax, opacity * exp(-sigma)): no gradient where capped.
           const M smooth = Mask::lt(e.raw_alpha, T(io::kAlphaMax), live);
@@ -165,10 +165,10 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
           const T dy = sp.my - py[y];  // mean minus pixel, as terms' dx
           const V dx_v = terms[k].dx * v_sigma;
           grads[kMomentX] += dx_v;
-          grads[kMomentXX] += terms[k].dx * dx_v;
-          grads[kMomentXY] += dy * dx_v;
-          grads[kMomentY] += dy * v_sigma;
-          grads[kMomentYY] += (dy * dy) * v_sigma;
+          grads[kMomentXX] = fma_lanes(terms[k].dx, dx_v, grads[kMomentXX]);
+          grads[kMomentXY] = fma_lanes(dy, dx_v, grads[kMomentXY]);
+          grads[kMomentY] = fma_lanes(dy, v_sigma, grads[kMomentY]);
+          grads[kMomentYY] = fma_lanes(dy * dy, v_sigma, grads[kMomentYY]);
         }
         trans[y] = t_row, behind_r[y] = br, behind_g[y] = bgr, behind_b[y] = bb, behind_z[y] = bz;
       }
@@ -184,12 +184,7 @@ ScreenGrads<T> composite_backward(const ForwardResultT<T>& f, const ImageGradsT<
     }
   });
 
-  ScreenGrads<T> g;
-  g.means2d.assign(n * 2, 0);
-  g.conics.assign(n * 3, 0);
-  g.opacities.assign(n, 0);
-  g.colors.assign(n * 3, 0);
-  g.depths.assign(n, 0);
+  ScreenGrads<T> g(n);
   // Each part sums the Gaussians of its id range, every one in sorted order, so the result does
   // not depend on how many parts there are.
   const std::size_t parts = static_cast<std::size_t>(pool.size());

@@ -14,6 +14,21 @@
 
 namespace splat::cpu {
 
+// Sizes a frame's output images to its camera and clears them: black, transmittance 1, no
+// contributor. Every compositing forward pass starts here.
+template <typename T>
+void start_images(ForwardResultT<T>& f) {
+  const std::size_t pixels = static_cast<std::size_t>(f.camera.width) * f.camera.height;
+  f.width = f.camera.width;
+  f.height = f.camera.height;
+  f.rgb.assign(pixels * 3, 0);
+  f.alpha.assign(pixels, 0);
+  f.depth.assign(pixels, 0);
+  f.depth_normalized.assign(pixels, 0);
+  f.last_contributor.assign(pixels, 0);
+  f.final_transmittance.assign(pixels, 1);
+}
+
 // Gradient slots per intersection in the backward pass (the order of shader_io.h).
 enum Slot { kMx, kMy, kCa, kCb, kCc, kOpacity, kR, kG, kB, kZ, kSlots };
 static_assert(kSlots == io::kGradSlots && kOpacity == io::kSlotOpacity && kZ == io::kSlotDepth);
@@ -58,11 +73,20 @@ struct PixelEval {
   T raw_alpha;  // opacity * gauss before the cap
 };
 
-// exp(x) for x <= 0 (a little above 0 is fine too). Float: 2^n e^r with n = round(x / ln 2)
-// and r = x - n ln 2 (Cephes' two-part ln 2, so r is exact), e^r by a degree-5 polynomial
-// (minimax relative error 9e-8 on |r| <= ln(2) / 2, fitted by Lawson's iteration; about 2 ulp
-// with rounding). Written as plain arithmetic so that it vectorizes (libm's expf does not
-// without -ffast-math), for one value or a row. Double: std::exp, for gradient checks.
+// The per-pixel maths of compositing, the same in shaders/composite.glsl operation for
+// operation: plain multiplies and adds, never fused (these sources are built with
+// -ffp-contract=off, and the shader marks them precise), each correctly rounded on any CPU or
+// Vulkan device, so the backends blend or skip a splat alike at the kAlphaMin and
+// kTransmittanceMin cut-offs and agree on alpha bit for bit (tests/splat/
+// composite_oracle_test.cpp). Fused multiply-adds would not do: lavapipe computes GLSL's fma()
+// as a multiply and an add, NVIDIA as one operation. (This costs the CPU forward about 10%
+// against fused exp and sigma. The colour and depth sums, which decide nothing, stay fused.)
+//
+// exp(x) for x <= 0 (a little above 0 is fine too). Float: 2^n e^r with n = x / ln 2 rounded to
+// nearest (ties to even) and r = x - n ln 2 (Cephes' two-part ln 2, so r is exact), e^r by a
+// degree-5 polynomial (minimax relative error 9e-8 on |r| <= ln(2) / 2, fitted by Lawson's
+// iteration; about 2 ulp with rounding). Plain arithmetic, so it vectorizes (libm's expf does
+// not without -ffast-math), for one value or a row. Double: std::exp, for gradient checks.
 template <typename V>
 inline V exp_nonpositive_float(V x) {
   x = max_lanes(x, -87.f);  // below, the result is under 2^-126 and would flush anyway
@@ -84,16 +108,16 @@ inline Row<double> exp_nonpositive(const Row<double>& x) {
   return e;
 }
 
-// sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2, as a quadratic in dx: dx (a/2 dx + b dy) + c/2 dy^2.
-// The terms in dx alone are per column and those in dy alone per row, so a pass that evaluates
-// one splat on many rows computes them once for all rows (SigmaTerms), leaving two operations
-// per pixel. Every pass computes sigma through these, in this order, so all agree to the bit.
+// sigma = (a dx^2 + 2 b dx dy + c dy^2) / 2, as a quadratic in dx: dx (a/2 dx + b dy) + c/2 dy^2,
+// with (dx, dy) the mean minus the pixel centre. The terms in dx alone are per column and those
+// in dy alone per row, so a pass that evaluates one splat on many rows computes them once for
+// all rows (SigmaTerms), leaving two operations per pixel.
 template <typename T, typename V>
-inline V half_a_dx(const Splat<T>& s, const V& dx) { return T(0.5) * s.ca * dx; }
+inline V half_a_dx(T ca, const V& dx) { return (T(0.5) * ca) * dx; }
 template <typename T, typename V>
-inline V b_dy(const Splat<T>& s, const V& dy) { return s.cb * dy; }
+inline V b_dy(T cb, const V& dy) { return cb * dy; }
 template <typename T, typename V>
-inline V half_c_dy2(const Splat<T>& s, const V& dy) { return T(0.5) * s.cc * dy * dy; }
+inline V half_c_dy2(T cc, const V& dy) { return ((T(0.5) * cc) * dy) * dy; }
 template <typename V, typename W>
 inline V sigma_from(const V& dx, const V& a_dx, const W& b_dy, const W& c_dy2) { return dx * (a_dx + b_dy) + c_dy2; }
 
@@ -103,30 +127,38 @@ struct SigmaTerms {
   Row<T> dx, a_dx, b_dy, c_dy2;
   SigmaTerms() = default;
   SigmaTerms(const Splat<T>& s, const Row<T>& px, const Row<T>& py)
-      : dx(s.mx - px), a_dx(half_a_dx(s, dx)), b_dy(cpu::b_dy(s, s.my - py)), c_dy2(half_c_dy2(s, s.my - py)) {}
+      : dx(s.mx - px), a_dx(half_a_dx(s.ca, dx)), b_dy(cpu::b_dy(s.cb, s.my - py)), c_dy2(half_c_dy2(s.cc, s.my - py)) {}
   Row<T> sigma(int row) const { return sigma_from(dx, a_dx, b_dy[row], c_dy2[row]); }
 };
 
 // gauss, alpha and the uncapped alpha from sigma.
 template <typename T, typename V>
-inline void eval_alpha(const Splat<T>& s, PixelEval<V>& e) {
+inline void eval_alpha(T opacity, PixelEval<V>& e) {
   // Where rounding makes sigma negative (at the mean) gauss is a little over 1, but such
   // pixels are never blended (gsplat skips sigma < 0).
   e.gauss = exp_nonpositive(-e.sigma);
-  e.raw_alpha = e.sigma >= 0 ? s.opacity * e.gauss : T(0);
+  e.raw_alpha = e.sigma >= 0 ? opacity * e.gauss : T(0);
   e.alpha = e.raw_alpha < T(io::kAlphaMax) ? e.raw_alpha : T(io::kAlphaMax);
+}
+template <typename T, typename V>
+inline void eval_alpha(const Splat<T>& s, PixelEval<V>& e) { eval_alpha(s.opacity, e); }
+
+// One splat (2D mean, conic, opacity) at one pixel centre, or a row of them.
+template <typename T, typename V>
+inline PixelEval<V> eval_pixel(T mx, T my, T ca, T cb, T cc, T opacity, const V& px, T py) {
+  PixelEval<V> e;
+  const T dy = my - py;
+  e.dx = mx - px;
+  e.dy = V{} + dy;
+  e.sigma = sigma_from(e.dx, half_a_dx(ca, e.dx), b_dy(cb, dy), half_c_dy2(cc, dy));
+  eval_alpha(opacity, e);
+  return e;
 }
 
 // V is T for one pixel or a row vector of T for a tile row; the row's py is one value.
 template <typename T, typename V>
 inline PixelEval<V> eval_pixel(const Splat<T>& s, const V& px, T py) {
-  PixelEval<V> e;
-  const T dy = s.my - py;
-  e.dx = s.mx - px;
-  e.dy = V{} + dy;
-  e.sigma = sigma_from(e.dx, half_a_dx(s, e.dx), b_dy(s, dy), half_c_dy2(s, dy));
-  eval_alpha(s, e);
-  return e;
+  return eval_pixel(s.mx, s.my, s.ca, s.cb, s.cc, s.opacity, px, py);
 }
 
 // 1 where the forward pass blended sorted splat s into a pixel whose contributors end at

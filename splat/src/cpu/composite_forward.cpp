@@ -23,16 +23,8 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
   using RowMask = RowMaskOf<T>;
   using Mask = LaneMask<T>;
   using M = typename Mask::M;
-  const int w = f.camera.width, h = f.camera.height;
-  const std::size_t pixels = static_cast<std::size_t>(w) * h;
-  f.width = w;
-  f.height = h;
-  f.rgb.assign(pixels * 3, 0);
-  f.alpha.assign(pixels, 0);
-  f.depth.assign(pixels, 0);
-  f.depth_normalized.assign(pixels, 0);
-  f.last_contributor.assign(pixels, 0);
-  f.final_transmittance.assign(pixels, 1);
+  start_images(f);
+  const int w = f.width, h = f.height;
   const T bg[3] = {T(f.settings.background[0]), T(f.settings.background[1]),
                    T(f.settings.background[2])};
   const std::vector<Splat<T>>& splats = pack_splats(f, pool);
@@ -105,10 +97,10 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
             const M keep = Mask::gt(next_t, T(io::kTransmittanceMin), blends);
             const M stop = Mask::and_not(blends, keep);
             const V weight = Mask::select(keep, e.alpha * t[q], V{});
-            r[q] += weight * sp.r;
-            g[q] += weight * sp.g;
-            b[q] += weight * sp.b;
-            z[q] += weight * sp.z;
+            r[q] = fma_lanes(weight, sp.r, r[q]);
+            g[q] = fma_lanes(weight, sp.g, g[q]);
+            b[q] = fma_lanes(weight, sp.b, b[q]);
+            z[q] = fma_lanes(weight, sp.z, z[q]);
             t[q] = Mask::select(keep, next_t, t[q]);
             l[q] = Mask::select(keep, chunk_next_last[k], l[q]);
             done[q] |= stop;
@@ -130,8 +122,8 @@ void composite_forward(ForwardResultT<T>& f, ThreadPool& pool) {
     for (int y = 0; y < geo.height; ++y) {
       const std::size_t o = static_cast<std::size_t>(geo.y0 + y) * w + geo.x0;
       const V alpha = 1 - trans[y];
-      const V red = acc_r[y] + trans[y] * bg[0], green = acc_g[y] + trans[y] * bg[1],
-              blue = acc_b[y] + trans[y] * bg[2];
+      const V red = fma_lanes(trans[y], bg[0], acc_r[y]), green = fma_lanes(trans[y], bg[1], acc_g[y]),
+              blue = fma_lanes(trans[y], bg[2], acc_b[y]);
       store_row(&f.alpha[o], alpha, geo.width);
       store_row(&f.depth[o], acc_z[y], geo.width);
       store_row(&f.depth_normalized[o], alpha > 0 ? acc_z[y] / alpha : T(0), geo.width);

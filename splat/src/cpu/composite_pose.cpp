@@ -80,19 +80,19 @@ void composite_pose_jvp(const ForwardResultT<T>& f, const std::vector<T>& screen
           const T inv = live / (1 - e.alpha);
 #pragma GCC unroll 6
           for (int k = 0; k < 6; ++k) {  // unrolled: a loop here would stop the pixel loop vectorizing
-            const T d_sigma = (quad[k] * e.dx + lin[k]) * e.dx + con[k];
+            const T d_sigma = fma_lanes(fma_lanes(quad[k], e.dx, lin[k]), e.dx, con[k]);
             const T d_alpha = -smooth * e.raw_alpha * d_sigma;
             const T d_weight = live * trans[p] * (d_alpha + e.alpha * d_log_t[k][p]);
-            d_rgb[0][k][p] += d_weight * sp.r;
-            d_rgb[1][k][p] += d_weight * sp.g;
-            d_rgb[2][k][p] += d_weight * sp.b;
+            d_rgb[0][k][p] = fma_lanes(d_weight, sp.r, d_rgb[0][k][p]);
+            d_rgb[1][k][p] = fma_lanes(d_weight, sp.g, d_rgb[1][k][p]);
+            d_rgb[2][k][p] = fma_lanes(d_weight, sp.b, d_rgb[2][k][p]);
             if constexpr (kViewDependent) {
-              d_rgb[0][k][p] += weight * jac[6 * 6 + k];
-              d_rgb[1][k][p] += weight * jac[7 * 6 + k];
-              d_rgb[2][k][p] += weight * jac[8 * 6 + k];
+              d_rgb[0][k][p] = fma_lanes(weight, jac[6 * 6 + k], d_rgb[0][k][p]);
+              d_rgb[1][k][p] = fma_lanes(weight, jac[7 * 6 + k], d_rgb[1][k][p]);
+              d_rgb[2][k][p] = fma_lanes(weight, jac[8 * 6 + k], d_rgb[2][k][p]);
             }
-            d_z[k][p] += d_weight * sp.z + weight * jac[5 * 6 + k];
-            d_log_t[k][p] -= d_alpha * inv;
+            d_z[k][p] = fma_lanes(d_weight, sp.z, fma_lanes(weight, jac[5 * 6 + k], d_z[k][p]));
+            d_log_t[k][p] = fma_lanes(-d_alpha, inv, d_log_t[k][p]);
           }
           trans[p] *= 1 - live * e.alpha;
         }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #if defined(__AVX512F__)
 #include <immintrin.h>
@@ -43,7 +44,7 @@ using RowUint = uint32_t __attribute__((vector_size(kRowLanes * sizeof(uint32_t)
 // floor, round to nearest, max and p 2^n for float lanes, scalar or row; with AVX-512 one
 // instruction each.
 inline float floor_lanes(float x) { return std::floor(x); }
-inline float round_lanes(float x) { return std::nearbyint(x); }
+inline float round_lanes(float x) { return std::nearbyint(x); }  // ties to even: we never change the rounding mode
 inline float max_lanes(float x, float lo) { return x < lo ? lo : x; }
 inline float scale_by_pow2(float p, float n) {  // n integral, 2^n normal
   return p * std::bit_cast<float>((static_cast<int32_t>(n) + 127) << 23);
@@ -74,9 +75,49 @@ inline Row<float> floor_lanes(Row<float> x) {  // exact for |x| < 2^23, as the r
 inline Row<float> scale_by_pow2(Row<float> p, Row<float> n) {
   return p * reinterpret_cast<Row<float>>((__builtin_convertvector(n, RowInt) + 127) << 23);
 }
-inline Row<float> round_lanes(Row<float> x) { return floor_lanes(x + 0.5f); }  // ties may go either way
+inline Row<float> round_lanes(Row<float> x) {  // ties to even, as the AVX-512 form and GLSL's roundEven
+  Row<float> r;
+  for (int k = 0; k < kRowLanes; ++k) r[k] = std::nearbyint(x[k]);
+  return r;
+}
 inline Row<float> max_lanes(Row<float> x, float lo) { return x < lo ? lo : x; }
 #endif
+
+// a b + c with one rounding, scalar or row. The compositing sources are built with
+// -ffp-contract=off, so the maths both backends share (shaders/composite.glsl) fuses exactly
+// where these are written, and nowhere else, whatever the compiler or target.
+inline float fma_lanes(float a, float b, float c) { return std::fma(a, b, c); }
+inline double fma_lanes(double a, double b, double c) { return std::fma(a, b, c); }
+// A row as it is, or a scalar in every lane.
+template <typename T, typename A>
+inline Row<T> as_row(const A& a) {
+  if constexpr (std::is_arithmetic_v<A>) {
+    return T(a) - Row<T>{};  // x - 0 is x for every x, -0 included: a plain broadcast
+  } else {
+    return a;
+  }
+}
+template <typename T, typename A, typename B, typename C>
+inline Row<T> fma_rows(const A& a, const B& b, const C& c) {
+  const Row<T> ra = as_row<T>(a), rb = as_row<T>(b), rc = as_row<T>(c);
+#if defined(__AVX512F__)
+  if constexpr (std::is_same_v<T, float>) {
+    return reinterpret_cast<Row<float>>(
+        _mm512_fmadd_ps(reinterpret_cast<__m512>(ra), reinterpret_cast<__m512>(rb), reinterpret_cast<__m512>(rc)));
+  }
+#endif
+  Row<T> r;
+  for (int k = 0; k < kRowLanes; ++k) r[k] = std::fma(ra[k], rb[k], rc[k]);
+  return r;
+}
+// Any mix of a row and scalars: the row's type decides.
+template <typename A, typename B, typename C>
+  requires(!(std::is_arithmetic_v<A> && std::is_arithmetic_v<B> && std::is_arithmetic_v<C>))
+inline auto fma_lanes(const A& a, const B& b, const C& c) {
+  using R = decltype(a * b + c);
+  using T = std::remove_cvref_t<decltype(R{}[0])>;
+  return fma_rows<T>(a, b, c);
+}
 
 inline double floor_lanes(double x) { return std::floor(x); }
 inline Row<double> floor_lanes(const Row<double>& x) {

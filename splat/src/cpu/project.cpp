@@ -145,8 +145,6 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
   std::fill(d.rotations.begin(), d.rotations.end(), T(0));
   std::fill(d.opacity_logits.begin(), d.opacity_logits.end(), T(0));
   std::fill(d.sh.begin(), d.sh.end(), T(0));
-  out.d_means2d = screen.means2d;
-  out.visible.assign(n, 0);
 
   // Pose gradient, summed per fixed-size chunk and then in chunk order: the result does not
   // depend on the thread count. dL/dW (3x3) and dL/dt (3) of p_cam = W p + t.
@@ -198,7 +196,6 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
 
       const bool visible = frame.radii[i * 2] > 0 || frame.radii[i * 2 + 1] > 0;
       if (visible) {
-        out.visible[i] = 1;
         v_p.z += screen.depths[i];
         const Vec4<T> q = load4(g.rotations, i);
         const T q_len = glm::length(q);

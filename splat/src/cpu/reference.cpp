@@ -66,6 +66,34 @@ void reference_pose_jacobian(const ForwardResultT<Scalar>& forward, ThreadPool& 
   timed(times, "composite_pose_jvp", [&] { cpu::composite_pose_jvp(forward, screen, pool, jacobian); });
 }
 
+template <typename Scalar>
+void scalar_composite(ForwardResultT<Scalar>& frame) {
+  const std::size_t n = frame.gaussians.size();
+  const std::size_t tiles = static_cast<std::size_t>(frame.tiles_x) * frame.tiles_y;
+  if (frame.means2d.size() != n * 2 || frame.conics.size() != n * 3 || frame.opacities.size() != n ||
+      frame.colors.size() != n * 3 || frame.depths.size() != n || frame.tile_ranges.size() != tiles * 2 ||
+      tiles == 0) {
+    throw Error("scalar_composite: the forward result has no intermediates for its " + std::to_string(n) +
+                " Gaussians (render with RenderSettings::intermediates)");
+  }
+  cpu::scalar_composite_forward(frame);
+}
+
+template <typename Scalar>
+BackwardResultT<Scalar> scalar_reference_backward(const ForwardResultT<Scalar>& forward,
+                                                  const ImageGradsT<Scalar>& d_image, ThreadPool& pool) {
+  validate_image_grads(forward, d_image);
+  BackwardResultT<Scalar> out;
+  cpu::project_backward(forward, cpu::scalar_composite_backward(forward, d_image), out, pool);
+  return out;
+}
+
+template void scalar_composite(ForwardResultT<float>&);
+template void scalar_composite(ForwardResultT<double>&);
+template BackwardResultT<float> scalar_reference_backward(const ForwardResultT<float>&, const ImageGradsT<float>&,
+                                                          ThreadPool&);
+template BackwardResultT<double> scalar_reference_backward(const ForwardResultT<double>&,
+                                                           const ImageGradsT<double>&, ThreadPool&);
 template void reference_pose_jacobian(const ForwardResultT<float>&, ThreadPool&, std::vector<float>&,
                                       StageTimes*);
 template void reference_pose_jacobian(const ForwardResultT<double>&, ThreadPool&, std::vector<double>&,

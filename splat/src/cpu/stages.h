@@ -12,6 +12,8 @@ namespace splat::cpu {
 // dL/d(per-Gaussian screen quantities): what compositing's backward hands to projection's.
 template <typename T>
 struct ScreenGrads {
+  explicit ScreenGrads(std::size_t n = 0)
+      : means2d(n * 2, 0), conics(n * 3, 0), opacities(n, 0), colors(n * 3, 0), depths(n, 0) {}
   std::vector<T> means2d;    // [N, 2]
   std::vector<T> conics;     // [N, 3]
   std::vector<T> opacities;  // [N]
@@ -36,6 +38,13 @@ void composite_forward(ForwardResultT<T>& frame, ThreadPool& pool);
 template <typename T>
 ScreenGrads<T> composite_backward(const ForwardResultT<T>& frame, const ImageGradsT<T>& d_image,
                                   ThreadPool& pool, std::vector<T>& scratch);
+
+// The readable oracle of the two passes above (composite_scalar.cpp): one pixel and one splat
+// at a time, as the shaders read. Tests compare the vectorized and Vulkan compositing with it.
+template <typename T>
+void scalar_composite_forward(ForwardResultT<T>& frame);
+template <typename T>
+ScreenGrads<T> scalar_composite_backward(const ForwardResultT<T>& frame, const ImageGradsT<T>& d_image);
 
 // Backward of projection: gradients of the Gaussian parameters and of the camera pose.
 template <typename T>

@@ -59,7 +59,7 @@ int type_rank(const std::string& type) {
 }
 
 // Storage buffers the widest stage binds (project_backward.comp).
-constexpr uint32_t kMostStorageBuffers = 17;
+constexpr uint32_t kMostStorageBuffers = 16;
 // Shared memory the largest stage needs (rasterize_backward.comp's partial sums and batch).
 constexpr uint32_t kSharedBytesNeeded =
     (io::kBackwardBatch * io::kGradSlots * io::kMaxSubgroups + io::kBackwardBatch * 16) * 4;

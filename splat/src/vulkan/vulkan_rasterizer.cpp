@@ -161,7 +161,7 @@ class VulkanRasterizer final : public Rasterizer {
                                 ? std::span<const uint32_t>(kRasterizeBackwardAtomicSpv)
                                 : std::span<const uint32_t>(kRasterizeBackwardSpv),
                             14, "rasterize_backward"),
-        project_backward_(*context_, kProjectBackwardSpv, 17, "project_backward"),
+        project_backward_(*context_, kProjectBackwardSpv, 16, "project_backward"),
         project_pose_jvp_(*context_, kProjectPoseJvpSpv, 9, "project_pose_jvp"),
         rasterize_pose_jvp_(*context_, kRasterizePoseJvpSpv, 11, "rasterize_pose_jvp"),
         d_rgb_(*context_),
@@ -170,7 +170,6 @@ class VulkanRasterizer final : public Rasterizer {
         isect_grads_(*context_),
         d_params_(*context_),
         d_sh_(*context_),
-        d_screen_(*context_),
         pose_partials_(*context_),
         screen_jvp_(*context_),
         jacobian_(*context_) {}
@@ -214,7 +213,6 @@ class VulkanRasterizer final : public Rasterizer {
     isect_grads_.reserve(std::size_t(s.intersections) * io::kGradSlots * 4);
     d_params_.reserve(n * kParamFloats * 4);
     d_sh_.reserve(n * stride_k * 3 * 4);
-    d_screen_.reserve(n * 3 * 4);
     pose_partials_.reserve(std::size_t(groups_for(n)) * io::kPosePartials * 4);
     batch_.upload(d_rgb_, d_image.rgb.data(), d_image.rgb.size() * 4);
     batch_.upload(d_alpha_, d_image.alpha.data(), d_image.alpha.size() * 4);
@@ -231,21 +229,18 @@ class VulkanRasterizer final : public Rasterizer {
         project_backward_,
         {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh, &s.conics,
          &s.opacities, &s.radii, &s.tile_counts, &s.first_instance, &s.sorted_position,
-         &isect_grads_, &d_params_, &d_sh_, &d_screen_, &pose_partials_},
+         &isect_grads_, &d_params_, &d_sh_, &pose_partials_},
         {}, groups_for(n));
-    std::vector<float> params, screen, partials;
+    std::vector<float> params, partials;
     BackwardResult out;
     GaussianGrads& d = out.d_gaussians;
     d.sh_degree = forward.gaussians.sh_degree;
     d.resize(n);
     download_into(batch_, d_params_, params, n * kParamFloats);
-    download_into(batch_, d_screen_, screen, n * 3);
     download_into(batch_, pose_partials_, partials, std::size_t(groups_for(n)) * io::kPosePartials);
     batch_.download(d_sh_, d.sh.data(), d.sh.size() * 4);
     batch_.run();
 
-    out.d_means2d.resize(n * 2);
-    out.visible.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const float* p = &params[i * kParamFloats];
       for (int k = 0; k < 3; ++k) {
@@ -254,9 +249,6 @@ class VulkanRasterizer final : public Rasterizer {
       }
       for (int k = 0; k < 4; ++k) d.rotations[i * 4 + k] = p[6 + k];
       d.opacity_logits[i] = p[10];
-      out.d_means2d[i * 2] = screen[i * 3];
-      out.d_means2d[i * 2 + 1] = screen[i * 3 + 1];
-      out.visible[i] = screen[i * 3 + 2] > 0 ? 1 : 0;
     }
     Eigen::Matrix3d d_w = Eigen::Matrix3d::Zero();
     Eigen::Vector3d d_t = Eigen::Vector3d::Zero();
@@ -443,7 +435,7 @@ class VulkanRasterizer final : public Rasterizer {
   RadixSort sort_;
   Kernel project_forward_, tiles_count_, tiles_emit_, tiles_finish_, rasterize_forward_,
       rasterize_backward_, project_backward_, project_pose_jvp_, rasterize_pose_jvp_;
-  Buffer d_rgb_, d_alpha_, d_depth_, isect_grads_, d_params_, d_sh_, d_screen_, pose_partials_,
+  Buffer d_rgb_, d_alpha_, d_depth_, isect_grads_, d_params_, d_sh_, pose_partials_,
       screen_jvp_, jacobian_;
 };
 
