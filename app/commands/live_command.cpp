@@ -77,7 +77,13 @@ int run_live(const LiveOptions& o) {
   std::string note;
   auto tracking_rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
-  auto mapping_rasterizer = make_rasterizer(o.backend, note);
+  // Mapping leaves one core to tracking and the camera (a CPU backend with all cores would make
+  // tracking wait for its turn).
+  BackendChoice mapping_backend = o.backend;
+  if (mapping_backend.threads == 0) {
+    mapping_backend.threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+  }
+  auto mapping_rasterizer = make_rasterizer(mapping_backend, note);
   std::unique_ptr<ViewerWindow> window;
   if (!o.headless) window = std::make_unique<ViewerWindow>("gslam live");
   auto view_rasterizer = splat::make_cpu_rasterizer({1});
@@ -197,10 +203,12 @@ int run_live(const LiveOptions& o) {
       }
       if (window->closed() || g_interrupted) shared.stop = true;
       const bool last = done || shared.stop;  // draw once more, then leave
-      // The screenshot once enough frames are tracked, or at the end if the stream was shorter.
+      // The screenshot once enough frames are tracked and mapping has published a map, or at
+      // the end if the stream was shorter.
+      const bool has_map = state.map && !state.map->empty();
       const bool want_screenshot =
           !o.screenshot.empty() && !screenshot_taken &&
-          (tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) || last);
+          ((tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) && has_map) || last);
       const bool want_snapshot = window->take_snapshot_request();
       splat::Image8 capture;
       window->show(compose_live_view(state, window->view(), *view_rasterizer), title,

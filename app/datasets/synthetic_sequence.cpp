@@ -7,6 +7,8 @@
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <random>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -107,7 +109,7 @@ class Scene {
 };
 
 // Camera to world at time s in [0, 1]: a smooth arc through the room, looking at its middle.
-Eigen::Isometry3d camera_pose(double s) {
+Eigen::Isometry3d arc_pose(double s) {
   const double angle = -0.6 + 1.0 * s;
   const Vector3d eye(1.6 * std::sin(angle), 0.1 * std::sin(3 * s), -1.9 * std::cos(angle) + 0.3 * s);
   const Vector3d target(0.1 * std::sin(2 * s), 0.8, 0.3);
@@ -119,10 +121,55 @@ Eigen::Isometry3d camera_pose(double s) {
   return pose;
 }
 
+// The arc at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
+Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {
+  const double duration = (o.frames - 1) / o.fps;
+  const Eigen::Isometry3d arc = arc_pose(duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0);
+  if (o.shake_peak_rate <= 0) return arc;
+  constexpr double kShakeHz = 1.5;
+  const double yaw = o.shake_peak_rate / (2 * M_PI * kShakeHz) * std::sin(2 * M_PI * kShakeHz * seconds);
+  return arc * Eigen::AngleAxisd(yaw, Vector3d::UnitY());
+}
+
+// Blobs of missing depth covering about `fraction` of the image: discs at random centres.
+std::vector<uint8_t> hole_mask(int w, int h, double fraction, std::mt19937& rng) {
+  std::vector<uint8_t> hole(static_cast<std::size_t>(w) * h, 0);
+  if (fraction <= 0) return hole;
+  const double radius = 0.03 * w;
+  const int blobs = static_cast<int>(std::ceil(fraction * w * h / (M_PI * radius * radius)));
+  std::uniform_real_distribution<double> ux(0, w), uy(0, h), ur(0.5 * radius, 1.5 * radius);
+  for (int b = 0; b < blobs; ++b) {
+    const double cx = ux(rng), cy = uy(rng), r = ur(rng);
+    for (int y = std::max(0, int(cy - r)); y < std::min(h, int(cy + r) + 1); ++y) {
+      for (int x = std::max(0, int(cx - r)); x < std::min(w, int(cx + r) + 1); ++x) {
+        if ((x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r) hole[static_cast<std::size_t>(y) * w + x] = 1;
+      }
+    }
+  }
+  return hole;
+}
+
 }  // namespace
+
+SyntheticOptions SyntheticOptions::hard_motion() {
+  SyntheticOptions o;
+  o.shake_peak_rate = 2.2;
+  o.exposure = 1.0 / 60;
+  o.blur_samples = 4;
+  o.depth_noise = 0.0015;
+  o.depth_holes = 0.05;
+  return o;
+}
 
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
   if (o.frames < 1 || o.width < 8 || o.height < 8) throw splat::Error("synthetic sequence: bad size or frame count");
+  if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) || !(o.depth_holes >= 0 && o.depth_holes < 1) ||
+      !(o.shake_peak_rate >= 0) || !(o.fps > 0)) {
+    throw splat::Error("synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake and "
+                       "holes below 1 expected");
+  }
+  std::mt19937 rng(o.seed);
+  std::normal_distribution<double> gauss(0, 1);
   std::filesystem::create_directories(dir / "rgb");
   std::filesystem::create_directories(dir / "depth");
   const Scene scene;
@@ -131,26 +178,38 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";
   const double cx = o.width / 2.0, cy = o.height / 2.0;
   for (int f = 0; f < o.frames; ++f) {
-    const double timestamp = 1000.0 + f / o.fps;
-    const Eigen::Isometry3d pose = camera_pose(o.frames > 1 ? static_cast<double>(f) / (o.frames - 1) : 0.0);
+    const double seconds = f / o.fps, timestamp = 1000.0 + seconds;
+    const Eigen::Isometry3d pose = camera_pose(o, seconds);  // mid-exposure: the ground truth
+    // Colour over the exposure: 2x2 supersamples per instant, the instants spread evenly.
+    std::vector<Eigen::Isometry3d> instants;
+    for (int k = 0; k < o.blur_samples; ++k) {
+      const double at = o.blur_samples > 1 ? (k + 0.5) / o.blur_samples - 0.5 : 0.0;
+      instants.push_back(camera_pose(o, seconds + at * o.exposure));
+    }
+    const std::vector<uint8_t> holes = hole_mask(o.width, o.height, o.depth_holes, rng);
     std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
     splat::Image16 depth(o.width, o.height, 1);
     for (int y = 0; y < o.height; ++y) {
       for (int x = 0; x < o.width; ++x) {
         Vector3d color = Vector3d::Zero();
-        // 2x2 supersampling for colour, the pixel centre for depth.
-        for (int s = 0; s < 5; ++s) {
-          const double sx = s < 4 ? 0.25 + 0.5 * (s % 2) : 0.5, sy = s < 4 ? 0.25 + 0.5 * (s / 2) : 0.5;
-          const Vector3d dir_cam((x + sx - cx) / o.focal, (y + sy - cy) / o.focal, 1.0);
-          Hit hit;
-          scene.intersect(pose.translation(), (pose.linear() * dir_cam).normalized(), hit);
-          if (!std::isfinite(hit.t)) continue;
-          if (s < 4) {
-            color += 0.25 * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
-          } else {
-            const double z = (pose.inverse() * hit.point).z();
-            depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
+        const double weight = 0.25 / static_cast<double>(instants.size());
+        for (const Eigen::Isometry3d& at : instants) {
+          for (int s = 0; s < 4; ++s) {
+            const Vector3d dir_cam((x + 0.25 + 0.5 * (s % 2) - cx) / o.focal, (y + 0.25 + 0.5 * (s / 2) - cy) / o.focal, 1.0);
+            Hit hit;
+            scene.intersect(at.translation(), (at.linear() * dir_cam).normalized(), hit);
+            if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
           }
+        }
+        // Depth at the pixel centre, mid-exposure.
+        const Vector3d ray = (pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
+        Hit hit;
+        scene.intersect(pose.translation(), ray, hit);
+        const bool grazing = std::isfinite(hit.t) && std::abs(hit.normal.dot(ray)) < std::cos(80 * M_PI / 180);
+        if (std::isfinite(hit.t) && !holes[static_cast<std::size_t>(y) * o.width + x] && !(o.depth_holes > 0 && grazing)) {
+          double z = (pose.inverse() * hit.point).z();
+          if (o.depth_noise > 0) z += o.depth_noise * z * z * gauss(rng);
+          depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
         }
         for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
       }

@@ -9,6 +9,19 @@ struct SyntheticOptions {
   int width = 320, height = 240;
   double focal = 260;     // pixels; principal point at the image centre
   double fps = 30;
+  // Hard cases. A yaw oscillation on top of the arc, peaking at this rate (rad/s, at 1.5 Hz).
+  double shake_peak_rate = 0;
+  // Motion blur: colour averaged over this exposure (seconds) in blur_samples instants.
+  double exposure = 0;
+  int blur_samples = 1;
+  // Depth noise: Gaussian, this many metres at 1 m, growing with z^2 (Kinect-like), then
+  // quantized to the 1/5000 m PNG step; and holes: blobs covering about this fraction of the
+  // pixels, plus every pixel whose surface is seen at more than 80 degrees.
+  double depth_noise = 0;
+  double depth_holes = 0;
+  uint32_t seed = 1;
+  // A hard-motion preset: 2.2 rad/s peaks, 1/60 s exposure, Kinect noise, 5% holes.
+  static SyntheticOptions hard_motion();
 };
 
 // Writes a synthetic RGB-D sequence in TUM layout (rgb/, depth/ as 16-bit PNG / 5000,

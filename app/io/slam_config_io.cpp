@@ -12,7 +12,7 @@ namespace {
 
 // One configuration field: its key path in the JSON document and where it lives. Reading and
 // writing both go through this one table, so what --print-config writes --config reads back.
-using FieldRef = std::variant<int*, std::size_t*, uint32_t*, double*, bool*, std::vector<int>*>;
+using FieldRef = std::variant<int*, std::size_t*, uint32_t*, double*, bool*, std::vector<int>*, std::string*>;
 struct Field {
   const char* section;  // "" for top-level keys
   const char* key;
@@ -21,8 +21,13 @@ struct Field {
 
 std::vector<Field> fields(SlamConfig& c) {
   tracking::TrackingConfig& t = c.tracking;
+  tracking::OdometryConfig& o = c.odometry;
   mapping::MapperConfig& m = c.mapping;
   return {
+      {"", "front_end", &c.front_end},
+      {"", "keyframe_render_iterations", &c.keyframe_render_iterations},
+      {"", "recovery_keyframes", &c.recovery_keyframes},
+      {"", "keyframe_overlap", &c.keyframe_overlap},
       {"", "keyframe_every", &c.keyframe_every},
       {"", "keyframe_translation", &c.keyframe_translation},
       {"", "keyframe_rotation_deg", &c.keyframe_rotation_deg},
@@ -33,6 +38,18 @@ std::vector<Field> fields(SlamConfig& c) {
       {"", "refine_densify_passes", &c.refine_densify_passes},
       {"", "refine_cache_mib", &c.refine_cache_mib},
       {"", "relocalize_iterations", &c.relocalize_iterations},
+      {"odometry", "iterations", &o.iterations},
+      {"odometry", "finest_width", &o.finest_width},
+      {"odometry", "max_points", &o.max_points},
+      {"odometry", "depth_noise", &o.depth_noise},
+      {"odometry", "t_dof", &o.t_dof},
+      {"odometry", "depth_weight", &o.depth_weight},
+      {"odometry", "min_depth", &o.min_depth},
+      {"odometry", "max_depth", &o.max_depth},
+      {"odometry", "min_step_translation", &o.min_step_translation},
+      {"odometry", "min_step_rotation", &o.min_step_rotation},
+      {"odometry", "min_overlap", &o.min_overlap},
+      {"odometry", "min_conditioning", &o.min_conditioning},
       {"tracking", "pyramid", &t.pyramid},
       {"tracking", "iterations", &t.iterations},
       {"tracking", "warmup_iterations", &t.warmup_iterations},
@@ -61,7 +78,8 @@ std::vector<Field> fields(SlamConfig& c) {
       {"mapping", "depth_alpha_threshold", &m.depth_alpha_threshold},
       {"mapping", "refine_depth_alpha_threshold", &m.refine_depth_alpha_threshold},
       {"mapping", "refine_learning_rate_scale", &m.refine_learning_rate_scale},
-      {"mapping", "refine_pose_rate_scale", &m.refine_pose_rate_scale},
+      {"mapping", "refine_pose_learning_rate", &m.refine_pose_learning_rate},
+      {"mapping", "refine_pose_rotation_learning_rate", &m.refine_pose_rotation_learning_rate},
       {"mapping", "refine_vignetting_rate", &m.refine_vignetting_rate},
       {"mapping", "isotropic", &m.isotropic},
       {"mapping", "densify_alpha", &m.densify_alpha},
@@ -124,6 +142,9 @@ void read_field(const Field& f, const nlohmann::json& v) {
         } else if constexpr (std::is_same_v<T, double>) {
           if (!v.is_number() || !std::isfinite(v.get<double>())) type_error(path, "a finite number", v);
           *target = v.get<double>();
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          if (!v.is_string()) type_error(path, "a string", v);
+          *target = v.get<std::string>();
         } else if constexpr (std::is_same_v<T, std::vector<int>>) {
           if (!v.is_array()) type_error(path, "a list of integers", v);
           std::vector<int> list;
@@ -138,7 +159,7 @@ void read_field(const Field& f, const nlohmann::json& v) {
 
 void read_section(const nlohmann::json& object, const std::string& section, const std::vector<Field>& table) {
   for (const auto& [key, value] : object.items()) {
-    if (section.empty() && (key == "tracking" || key == "mapping")) {
+    if (section.empty() && (key == "odometry" || key == "tracking" || key == "mapping")) {
       if (!value.is_object()) type_error(key, "an object of settings", value);
       read_section(value, key, table);
       continue;
@@ -168,7 +189,8 @@ SlamConfig slam_config_from_json(const nlohmann::json& document) {
 
 nlohmann::json slam_config_to_json(const SlamConfig& config) {
   SlamConfig copy = config;
-  nlohmann::json document = {{"tracking", nlohmann::json::object()}, {"mapping", nlohmann::json::object()}};
+  nlohmann::json document = {
+      {"odometry", nlohmann::json::object()}, {"tracking", nlohmann::json::object()}, {"mapping", nlohmann::json::object()}};
   for (const Field& f : fields(copy)) {
     nlohmann::json& section = *f.section ? document[f.section] : document;
     std::visit([&](auto* value) { section[f.key] = *value; }, f.ref);

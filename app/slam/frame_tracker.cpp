@@ -13,27 +13,94 @@ namespace app {
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
     : rasterizer_(rasterizer), config_(config) {}
 
-void FrameTracker::start(double timestamp) {
+void FrameTracker::start(const splat::RgbdFrame& frame) {
   last_poses_ = {Eigen::Isometry3d::Identity()};
-  last_times_ = {timestamp};
+  last_times_ = {frame.timestamp};
   last_keyframe_ = Eigen::Isometry3d::Identity();
   since_keyframe_ = 0;
+  references_.clear();
+  if (config_.front_end == "odometry") {
+    references_.push_front({std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry), 0});
+  }
 }
 
-FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::RgbdFrame& frame) {
+Eigen::Isometry3d FrameTracker::predict(double timestamp) const {
+  // Constant velocity: the last inter-frame motion, scaled to this frame's time step (equal
+  // steps when the timestamps do not say otherwise), which bridges dropped frames.
+  const Eigen::Isometry3d last = last_poses_.back();
+  if (last_poses_.size() < 2) return last;
+  const double step = last_times_.back() - last_times_.front(), now = timestamp - last_times_.back();
+  const double scale = step > 0 && now > 0 ? std::min(now / step, 10.0) : 1.0;
+  const Eigen::Isometry3d motion = last_poses_.front().inverse() * last;
+  return splat::orthonormalized(last * (scale == 1.0 ? motion : splat::se3_exp(scale * splat::se3_log(motion))));
+}
+
+FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::RgbdFrame& frame,
+                                const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose) {
   FrameRecord record;
   record.timestamp = frame.timestamp;
-  // Constant velocity: the last inter-frame motion, scaled to this frame's time step (equal
-  // steps when the timestamps do not say otherwise).
-  const Eigen::Isometry3d last = last_poses_.back();
-  Eigen::Isometry3d guess = last;
-  if (last_poses_.size() >= 2) {
-    const double step = last_times_.back() - last_times_.front(), now = frame.timestamp - last_times_.back();
-    const double scale = step > 0 && now > 0 ? std::min(now / step, 10.0) : 1.0;
-    const Eigen::Isometry3d motion = last_poses_.front().inverse() * last;
-    guess = splat::orthonormalized(last * (scale == 1.0 ? motion : splat::se3_exp(scale * splat::se3_log(motion))));
-  }
   const auto start = std::chrono::steady_clock::now();
+  if (config_.front_end == "odometry") {
+    track_odometry(frame, keyframe_pose, record);
+  } else {
+    track_render(map, frame, record);
+  }
+  record.tracking_ms = ms_since(start);
+  // A failed frame's pose is a guess: the motion model keeps the last tracked poses.
+  if (record.tracked) {
+    last_poses_ = {last_poses_.back(), record.T_world_cam};
+    last_times_ = {last_times_.back(), frame.timestamp};
+  }
+  ++since_keyframe_;
+  return record;
+}
+
+bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_world_reference,
+                         const Eigen::Isometry3d& guess, FrameRecord& record) const {
+  const tracking::OdometryResult r =
+      tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, config_.odometry);
+  record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
+  record.tracked = r.converged;
+  record.reason = r.reason;
+  record.overlap = r.overlap;
+  return r.converged;
+}
+
+void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
+                                  const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
+                                  FrameRecord& record) {
+  last_prepared_ = std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
+  const Eigen::Isometry3d guess = predict(frame.timestamp);
+  const Reference& newest = references_.front();
+  if (align(newest, keyframe_pose(newest.keyframe), guess, record)) return;
+  // Lost: from the last pose (no motion), then against the older references.
+  FrameRecord first_try = record;
+  record.retried = true;
+  if (align(newest, keyframe_pose(newest.keyframe), last_poses_.back(), record)) return;
+  for (std::size_t k = 1; k < references_.size(); ++k) {
+    if (align(references_[k], keyframe_pose(references_[k].keyframe), last_poses_.back(), record)) return;
+  }
+  record = first_try;  // nothing converged: report the first attempt
+  record.retried = true;
+}
+
+void FrameTracker::refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record) {
+  if (config_.front_end != "odometry" || config_.keyframe_render_iterations <= 0 || !record.tracked) return;
+  const auto start = std::chrono::steady_clock::now();
+  tracking::TrackingConfig t = config_.tracking;
+  t.pyramid = {t.pyramid.back()};
+  t.iterations = {config_.keyframe_render_iterations};
+  const tracking::TrackingResult r = tracking::track_frame(rasterizer_, map, frame, record.T_world_cam.inverse(), t);
+  record.renders += r.renders;
+  if (r.converged) {
+    record.T_world_cam = r.T_cam_world.inverse();
+    last_poses_.back() = record.T_world_cam;
+  }
+  record.tracking_ms += ms_since(start);
+}
+
+void FrameTracker::track_render(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record) {
+  const Eigen::Isometry3d guess = predict(frame.timestamp), last = last_poses_.back();
   tracking::TrackingResult result = tracking::track_frame(rasterizer_, map, frame, guess.inverse(), config_.tracking);
   record.renders = result.renders;
   if (!result.converged) {
@@ -45,17 +112,9 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
     record.renders += second.renders;
     if (second.converged || second.final_cost < result.final_cost) result = second;
   }
-  record.tracking_ms = ms_since(start);
   record.tracked = result.converged;
   record.reason = result.reason;
   record.T_world_cam = result.T_cam_world.inverse();
-  // A failed frame's pose is a guess: the motion model keeps the last tracked poses.
-  if (record.tracked) {
-    last_poses_ = {last, record.T_world_cam};
-    last_times_ = {last_times_.back(), frame.timestamp};
-  }
-  ++since_keyframe_;
-  return record;
 }
 
 bool FrameTracker::wants_keyframe(const FrameRecord& record) const {
@@ -63,12 +122,15 @@ bool FrameTracker::wants_keyframe(const FrameRecord& record) const {
   const Eigen::Isometry3d motion = last_keyframe_.inverse() * record.T_world_cam;
   const double degrees = Eigen::AngleAxisd(motion.linear()).angle() * 180 / M_PI;
   return since_keyframe_ >= config_.keyframe_every || motion.translation().norm() > config_.keyframe_translation ||
-         degrees > config_.keyframe_rotation_deg;
+         degrees > config_.keyframe_rotation_deg || record.overlap < config_.keyframe_overlap;
 }
 
-void FrameTracker::keyframe_added(const Eigen::Isometry3d& T_world_cam) {
-  last_keyframe_ = T_world_cam;
+void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number) {
+  last_keyframe_ = record.T_world_cam;
   since_keyframe_ = 0;
+  if (config_.front_end != "odometry") return;
+  references_.push_front({last_prepared_, number});
+  if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
 }
 
 }  // namespace app

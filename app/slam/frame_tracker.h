@@ -1,6 +1,12 @@
-// The tracking half of SLAM: each new frame tracked against the map from a constant-velocity
-// guess, retried once on failure, and the keyframe policy.
+// The tracking half of SLAM: each new frame's pose, from a constant-velocity guess, by one of two
+// front ends, retried and recovered on failure; and the keyframe policy.
+// - odometry (default): dense RGB-D alignment against the reference keyframe's own colour and
+//   depth (tracking/rgbd_odometry.h); its cost does not depend on the map.
+// - render: Levenberg-Marquardt through the rasterizer against the map (tracking/tracker.h).
 #pragma once
+#include <deque>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +16,7 @@
 #include "splat/gaussians.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
+#include "tracking/rgbd_odometry.h"
 
 namespace app {
 
@@ -17,37 +24,60 @@ namespace app {
 struct FrameRecord {
   double timestamp = 0;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // as tracked
-  bool tracked = true;  // false: tracking failed even after the retry
+  bool tracked = true;  // false: tracking failed even after the retries
   bool retried = false;
-  std::string reason;  // why tracking failed
+  std::string reason;   // why tracking failed
   bool keyframe = false;
-  int renders = 0;
+  int renders = 0;      // rasterizer forward passes spent on tracking
+  double overlap = 1;   // odometry: fraction of the reference's points this frame sees
   double tracking_ms = 0, mapping_ms = 0;
   std::size_t gaussians = 0;  // in the map after this frame
 };
 
-// The guess is the last motion scaled to the time since the last frame (so dropped frames are
-// bridged); a failure is retried from the last pose with the first-order warm-up. Failed frames
-// keep their best pose and are reported, and never move the motion model.
 class FrameTracker {
  public:
   FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config);
-  // The first frame (at `timestamp`) defines the world frame.
-  void start(double timestamp);
+  // The first frame defines the world frame and is the first reference keyframe (number 0).
+  void start(const splat::RgbdFrame& frame);
   bool started() const { return !last_poses_.empty(); }
-  // Fills timestamp, pose, tracked, retried, reason, renders and tracking_ms.
-  FrameRecord track(const splat::GaussiansView& map, const splat::RgbdFrame& frame);
-  // Whether a tracked frame at this pose should become a keyframe; keyframe_added() resets.
+  // Tracks a frame. `keyframe_pose(k)` gives keyframe k's camera-to-world pose as the system
+  // holds it now (mapping may have moved it). Fills timestamp, pose, tracked, retried, reason,
+  // renders, overlap and tracking_ms.
+  FrameRecord track(const splat::GaussiansView& map, const splat::RgbdFrame& frame,
+                    const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose);
+  // Whether a tracked frame should become a keyframe; keyframe_added() makes the frame last
+  // tracked the new reference, as keyframe `number`.
   bool wants_keyframe(const FrameRecord& record) const;
-  void keyframe_added(const Eigen::Isometry3d& T_world_cam);
+  // Odometry front end with keyframe_render_iterations > 0: refines a new keyframe's pose
+  // through the rasterizer against the map, from the odometry's estimate.
+  void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
+  void keyframe_added(const FrameRecord& record, std::size_t number);
 
  private:
+  struct Reference {
+    std::shared_ptr<const tracking::OdometryFrame> frame;
+    std::size_t keyframe;
+  };
+  // The constant-velocity guess for a frame at `timestamp`.
+  Eigen::Isometry3d predict(double timestamp) const;
+  // Odometry against `reference` from `guess` (world poses); fills the record's pose and result.
+  bool align(const Reference& reference, const Eigen::Isometry3d& T_world_reference, const Eigen::Isometry3d& guess,
+             FrameRecord& record) const;
+  void track_odometry(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
+                      FrameRecord& record);
+  void track_render(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
+
   splat::Rasterizer& rasterizer_;
   const SlamConfig& config_;
   std::vector<Eigen::Isometry3d> last_poses_;  // the last two tracked camera-to-world poses
   std::vector<double> last_times_;             // and their timestamps
   Eigen::Isometry3d last_keyframe_ = Eigen::Isometry3d::Identity();
   int since_keyframe_ = 0;
+  // Odometry: the frame last tracked, prepared (it becomes the reference if it is a keyframe),
+  // and the recent references, newest first: a frame lost against the newest is retried against
+  // the others.
+  std::shared_ptr<const tracking::OdometryFrame> last_prepared_;
+  std::deque<Reference> references_;
 };
 
 }  // namespace app

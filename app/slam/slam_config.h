@@ -1,19 +1,35 @@
 // Every setting of the SLAM system in one struct. Each default is written once, at its
 // declaration here or in TrackingConfig / MapperConfig; docs/tuning.md holds how they were chosen.
 #pragma once
+#include <string>
+
 #include "mapping/mapper.h"
+#include "tracking/rgbd_odometry.h"
 #include "tracking/tracker.h"
 
 namespace app {
 
 struct SlamConfig {
+  // How frames are tracked: "odometry" (dense RGB-D alignment against the reference keyframe,
+  // a few milliseconds a frame whatever the map) or "render" (through the rasterizer against
+  // the map, `tracking`; hundreds of milliseconds a frame).
+  std::string front_end = "odometry";
+  tracking::OdometryConfig odometry;
   tracking::TrackingConfig tracking;
   mapping::MapperConfig mapping;
+  // Odometry: a new keyframe's pose refined through the rasterizer with this many iterations
+  // at the finest tracking level (0: off).
+  int keyframe_render_iterations = 0;
+  // Odometry: a frame lost against the newest reference keyframe is retried against this many
+  // older ones.
+  int recovery_keyframes = 3;
   // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
   // since the last keyframe.
   int keyframe_every = 5;
   double keyframe_translation = 0.05;  // metres
   double keyframe_rotation_deg = 5.0;
+  // Odometry: or once the frame sees less than this fraction of its reference's points.
+  double keyframe_overlap = 0.6;
   // A frame whose tracking failed is retried once from the last pose with this many first-order
   // warm-up steps (TrackingConfig::warmup_iterations), whose basin is wider.
   int retry_warmup_iterations = 20;

@@ -2,6 +2,12 @@
 
 #include <chrono>
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 #include "slam/elapsed.h"
 #include "splat/error.h"
 
@@ -98,13 +104,19 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   if (!tracker_.started()) {
     record.timestamp = frame.timestamp;
     record.keyframe = true;
-    tracker_.start(frame.timestamp);
+    tracker_.start(frame);
   } else {
-    const std::shared_ptr<const splat::Gaussians> map = this->map();
-    record = tracker_.track(*map, frame);
+    // Threaded, the odometry may track before the first keyframe is mapped: an empty map then.
+    static const splat::Gaussians kNoMap;
+    const std::shared_ptr<const splat::Gaussians> snapshot = this->map();
+    const splat::Gaussians& map = snapshot ? *snapshot : kNoMap;
+    record = tracker_.track(map, frame, [this](std::size_t k) {
+      std::lock_guard lock(mutex_);
+      return keyframe_world_[k];
+    });
     if (tracker_.wants_keyframe(record)) {
       record.keyframe = true;
-      tracker_.keyframe_added(record.T_world_cam);
+      tracker_.refine_keyframe(map, frame, record);
     }
   }
   std::optional<KeyframeJob> job;
@@ -115,10 +127,13 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
       keyframe_world_.push_back(record.T_world_cam);
     }
   }
-  // The first keyframe seeds the map before anything is tracked against it.
-  if (job && (!threaded_ || job->keyframe == 0)) {
+  if (job && job->keyframe > 0) tracker_.keyframe_added(record, job->keyframe);
+  if (threaded_ && !thread_.joinable()) thread_ = std::thread([this] { mapping_loop(); });
+  // The render front end tracks against the map: the first keyframe seeds it before anything
+  // is tracked. The odometry needs no map, so threaded it maps even the first in the background.
+  const bool map_now = !threaded_ || (job && job->keyframe == 0 && config_.front_end == "render");
+  if (job && map_now) {
     record.mapping_ms = map_keyframe(*job);
-    if (threaded_) thread_ = std::thread([this] { mapping_loop(); });
   } else if (job) {
     {
       std::lock_guard lock(mutex_);
@@ -132,11 +147,16 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   // Relative to the keyframe as known now (sequential: after mapping moved it).
   frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
                      record.tracked, record.keyframe});
-  record.gaussians = map_->size();
+  record.gaussians = map_ ? map_->size() : 0;
   return record;
 }
 
 void SlamSystem::mapping_loop() {
+#ifdef __linux__
+  // Mapping yields the processor to tracking, which must keep up with the camera (Linux sets
+  // niceness per thread).
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
+#endif
   for (;;) {
     KeyframeJob job;
     {

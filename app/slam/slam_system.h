@@ -76,7 +76,7 @@ class SlamSystem {
   // The final sweep (SlamConfig::refine_passes) over refine_frames(), each loaded with
   // load(frame index) and kept while refine_cache_mib allows, in a shuffled order that is the
   // same on every run; the first passes densify (refine_densify_passes). Visited frames but the
-  // first (the world frame) move with the map (MapperConfig::refine_pose_rate_scale), and
+  // first (the world frame) move with the map (MapperConfig::refine_pose_learning_rate), and
   // trajectory() returns the moved poses. Then prunes, and re-tracks where
   // relocalize_iterations > 0. Finishes mapping first. Calls visited(done, total) after each visit.
   Refinement refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,

@@ -26,7 +26,8 @@ void MapperConfig::validate(const std::string& prefix) const {
   check.in_range("depth_alpha_threshold", depth_alpha_threshold, 0.0, 1.0);
   check.in_range("refine_depth_alpha_threshold", refine_depth_alpha_threshold, 0.0, 1.0);
   check.positive("refine_learning_rate_scale", refine_learning_rate_scale);
-  check.at_least("refine_pose_rate_scale", refine_pose_rate_scale, 0.0);
+  check.at_least("refine_pose_learning_rate", refine_pose_learning_rate, 0.0);
+  check.at_least("refine_pose_rotation_learning_rate", refine_pose_rotation_learning_rate, 0.0);
   check.at_least("refine_vignetting_rate", refine_vignetting_rate, 0.0);
   check.in_range("densify_alpha", densify_alpha, 0.0, 1.0);
   check.positive("depth_error_factor", depth_error_factor);
@@ -113,11 +114,10 @@ void adam_step(int n, double* params, const double* gradient, const double* rate
 }  // namespace
 
 void Mapper::step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
-                       double rate_scale) const {
-  const bool moves = rate_scale > 0 && (config_.pose_learning_rate > 0 || config_.pose_rotation_learning_rate > 0);
-  if (!moves) return;
+                       double translation_rate, double rotation_rate) const {
+  if (!(translation_rate > 0 || rotation_rate > 0)) return;
   double rates[6];
-  for (int k = 0; k < 6; ++k) rates[k] = rate_scale * (k < 3 ? config_.pose_learning_rate : config_.pose_rotation_learning_rate);
+  for (int k = 0; k < 6; ++k) rates[k] = k < 3 ? translation_rate : rotation_rate;
   splat::Vector6d delta = splat::Vector6d::Zero();
   adam_step(6, delta.data(), gradient.data(), rates, adam.m.data(), adam.v.data(), adam.steps);
   T_cam_world = splat::orthonormalized(splat::se3_exp(delta) * T_cam_world);
@@ -160,9 +160,10 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
                                                  step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
-    step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, 1.0);
+    step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, config_.pose_learning_rate, config_.pose_rotation_learning_rate);
   } else if (step == Step::kRefine && pose) {
-    step_pose(kf.T_cam_world, *pose, backward.d_loss_d_pose, config_.refine_pose_rate_scale);
+    step_pose(kf.T_cam_world, *pose, backward.d_loss_d_pose, config_.refine_pose_learning_rate,
+              config_.refine_pose_rotation_learning_rate);
   }
   splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {

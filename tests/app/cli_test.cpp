@@ -153,7 +153,7 @@ TEST(CliReconstruct, PrintedConfigReadsBackAndBadConfigIsRefusedByName) {
   ASSERT_EQ(printed.exit_code, 0) << printed.output;
   const nlohmann::json config = nlohmann::json::parse(printed.output);
   EXPECT_EQ(config.at("refine_passes").get<int>(), 12);
-  EXPECT_EQ(config.at("mapping").at("iterations").get<int>(), 45);
+  EXPECT_EQ(config.at("mapping").at("iterations").get<int>(), 20);
   gslam::test::write_text(dir / "printed.json", printed.output);
   const RunResult again = run_gslam("reconstruct --print-config --config " + (dir / "printed.json").string());
   ASSERT_EQ(again.exit_code, 0) << again.output;

@@ -84,16 +84,18 @@ TEST(SlamSystem, SyntheticRoomTrajectoryWithinOneCentimetre) {
   EXPECT_LT(e.ate_rmse, 0.01);
 }
 
-// Mapping moves keyframe poses (MapperConfig::pose_*learning_rate) but never the first, which
-// defines the world frame; with both rates 0 every frame keeps its tracked pose.
+// Mapping moves keyframe poses (MapperConfig::pose_*learning_rate > 0) but never the first,
+// which defines the world frame; with both rates 0 (the default) every frame keeps its tracked
+// pose until the final sweep.
 TEST(SlamSystem, MappingMovesKeyframesButNeverTheFirst) {
   gslam::test::TempDir dir;
   const app::Dataset dataset = synthetic_dataset(dir, 12);
   auto rasterizer = splat::make_cpu_rasterizer();
-  ASSERT_GT(app::SlamConfig{}.mapping.pose_learning_rate, 0) << "the default moves keyframes";
   for (const bool move : {true, false}) {
     app::SlamConfig config;
-    if (!move) config.mapping.pose_learning_rate = config.mapping.pose_rotation_learning_rate = 0;
+    // The rates the render front end uses; the odometry's default keeps keyframes fixed.
+    config.mapping.pose_learning_rate = move ? 2e-4 : 0;
+    config.mapping.pose_rotation_learning_rate = move ? 5e-5 : 0;
     app::SlamSystem slam(*rasterizer, config);
     const std::vector<app::FrameRecord> records = process_all(slam, dataset);
     const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
@@ -207,7 +209,7 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
   ASSERT_EQ(refined.size(), records.size());
   EXPECT_EQ(refinement.visits, total);
   // The refined frames' poses moved with the map, but the first, which is the world frame.
-  ASSERT_GT(config.mapping.refine_pose_rate_scale, 0);
+  ASSERT_GT(config.mapping.refine_pose_learning_rate, 0);
   EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
   auto ate = [&](const std::vector<app::FrameRecord>& poses) {
     std::vector<app::StampedPose> estimate, truth;
@@ -288,6 +290,8 @@ TEST(SlamSystem, ThreadedMappingThatKeepsUpGivesTheSequentialTrajectory) {
   const app::Dataset dataset = synthetic_dataset(dir, 10);
   app::SlamConfig config;
   config.mapping.iterations = 10;
+  config.mapping.pose_learning_rate = 2e-4;  // mapping moves keyframes: their frames must follow
+  config.mapping.pose_rotation_learning_rate = 5e-5;
   auto rasterizer = splat::make_cpu_rasterizer({2});
   app::SlamSystem sequential(*rasterizer, config);
   const std::vector<app::FrameRecord> records = process_all(sequential, dataset);
@@ -342,6 +346,37 @@ TEST(SlamSystem, ThreadedModeRefusesTheTrackingRasterizerForMapping) {
         }
       },
       splat::Error);
+}
+
+}  // namespace
+
+namespace {
+
+// Measured 0.97 cm with the odometry front end (the test prints it); half as much again allows
+// for other compilers' rounding, far below what a lost or drifting frame costs.
+constexpr double kHardMotionAteBound = 0.015;
+
+// The generator's hard case (tracking/ issue: fast rotation peaking at 2.2 rad/s, motion blur,
+// Kinect-like depth noise and holes), tracked by the default front end with the map built as
+// usual: no frame lost, and the trajectory within the bound below of the exact truth.
+TEST(SlamSystem, HardMotionSyntheticSequenceTracksEveryFrame) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o = app::SyntheticOptions::hard_motion();
+  o.frames = 60;  // two seconds: three shake periods, six rotation-rate peaks
+  app::write_synthetic_sequence(dir / "hard", o);
+  const app::Dataset dataset = app::open_dataset(dir / "hard");
+  double peak_rate = 0;
+  for (std::size_t i = 1; i < dataset.entries.size(); ++i) {
+    const Eigen::Isometry3d step = dataset.entries[i - 1].T_world_cam_truth->inverse() * *dataset.entries[i].T_world_cam_truth;
+    peak_rate = std::max(peak_rate, Eigen::AngleAxisd(step.linear()).angle() * o.fps);
+  }
+  ASSERT_GE(peak_rate, 2.0) << "the sequence must rotate at 2 rad/s or more";
+  std::size_t failures = 0;
+  const app::TrajectoryErrors e = reconstruct(dataset, failures);
+  std::printf("hard motion: peak %.2f rad/s, ATE %.2f cm over %zu frames, %zu failures\n", peak_rate, e.ate_rmse * 100,
+              e.matched, failures);
+  EXPECT_EQ(failures, 0u);
+  EXPECT_LT(e.ate_rmse, kHardMotionAteBound);
 }
 
 }  // namespace

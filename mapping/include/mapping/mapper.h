@@ -17,7 +17,9 @@ namespace mapping {
 struct MapperConfig {
   int resolution_factor = 2;  // keyframes are stored and optimized at 1/factor resolution
   int refine_resolution_factor = 2;  // the same for the final refinement (refine())
-  int iterations = 45;        // Adam steps per keyframe (30 -> 45 took teddy's ATE 1.31 -> 1.11 cm)
+  // Adam steps per keyframe. With the odometry the map does not steer tracking, and the final
+  // sweep polishes it: 45 -> 20 gave teddy 26.58 -> 27.07 dB, 7-Scenes 24.57 -> 24.55 dB.
+  int iterations = 20;
   int window = 4;             // keyframes per optimization window (the new one included)
   std::size_t max_keyframes = 12;  // stored keyframes; the least covisible is dropped beyond
   double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
@@ -34,10 +36,10 @@ struct MapperConfig {
   // Adam's learning rates in the final refinement, relative to the window steps': at full rate
   // repeated sweeps degraded the render.
   double refine_learning_rate_scale = 0.5;
-  // Pose steps in the final refinement, relative to the window steps' (pose_learning_rate,
-  // pose_rotation_learning_rate); 0 keeps each refined frame where tracking and mapping put it.
-  // At 10x the poses agree with the final map (teddy ATE 1.23 -> 0.98 cm at the same PSNR).
-  double refine_pose_rate_scale = 10;
+  // Pose steps in the final refinement (Adam on se(3), metres and radians); 0 keeps each
+  // refined frame where tracking and mapping put it. These the poses agree with the final map
+  // (teddy ATE 1.23 -> 0.98 cm at the same PSNR, with the render front end).
+  double refine_pose_learning_rate = 2e-3, refine_pose_rotation_learning_rate = 5e-4;
   // Adam's step for the camera's vignetting (k1, k2) in the final refinement; 0 leaves it at
   // none. Every step renders through the current vignetting (teddy: +0.5 dB as recorded).
   double refine_vignetting_rate = 2e-3;
@@ -61,9 +63,10 @@ struct MapperConfig {
   AdamConfig adam;
   // Keyframe poses move with the map in the window optimization (Adam on se(3), left updates,
   // these step sizes in metres and radians); the first keyframe stays fixed as the world
-  // frame. 0 keeps every keyframe where tracking put it. These improved ATE on teddy and on the
-  // synthetic room alike (3.08 -> 1.24 and 0.39 -> 0.31 cm).
-  double pose_learning_rate = 2e-4, pose_rotation_learning_rate = 5e-5;
+  // frame. 0 keeps every keyframe where tracking put it, which suits the odometry front end
+  // (teddy ATE 1.21 -> 0.95 cm, PSNR 25.4 -> 26.6 dB; 7-Scenes 3.48 -> 3.52 cm). With the render
+  // front end 2e-4 / 5e-5 helped on teddy and the synthetic room (3.08 -> 1.24, 0.39 -> 0.31 cm).
+  double pose_learning_rate = 0, pose_rotation_learning_rate = 0;
   uint32_t random_seed = 1;
   // Throws splat::Error naming the first field out of range, as `prefix` + field name.
   void validate(const std::string& prefix = "MapperConfig.") const;
@@ -96,7 +99,7 @@ class Mapper {
   // keyframe store may have dropped, given as refinement_frame() made it. Sweeping every frame
   // this way undoes what later windows did to regions they saw poorly. With `densify`, Gaussians
   // are first added where the frame sees what the map lacks (as for a keyframe); no pruning.
-  // Where `pose` is given (and refine_pose_rate_scale > 0) the frame's pose moves with the map,
+  // Where `pose` is given (and refine_pose_learning_rate > 0) the frame's pose moves with the map,
   // with that Adam state; otherwise it stays.
   double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
                 int iterations, bool densify = false);
@@ -127,9 +130,9 @@ class Mapper {
   // where `pose` is given.
   enum class Step { kWindow, kRefine };
   double optimize_step(Keyframe& kf, Step step, PoseAdam* pose);
-  // One Adam step of a pose from the loss's pose gradient, at `rate_scale` x the pose rates.
+  // One Adam step of a pose from the loss's pose gradient, at these rates.
   void step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
-                 double rate_scale) const;
+                 double translation_rate, double rotation_rate) const;
   // One Adam step of the vignetting from the loss's gradient (refine_vignetting_rate).
   void step_vignetting(const std::array<double, 2>& gradient);
 

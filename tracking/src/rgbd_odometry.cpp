@@ -1,0 +1,322 @@
+#include "tracking/rgbd_odometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "splat/error.h"
+#include "splat/field_check.h"
+#include "splat/se3.h"
+
+namespace tracking {
+
+void OdometryConfig::validate(const std::string& prefix) const {
+  const splat::FieldCheck check(prefix);
+  if (iterations.empty() || iterations.size() > 6) {
+    check.fail("iterations", "one count per pyramid level, 1 to 6 levels", std::to_string(iterations.size()) + " counts");
+  }
+  for (int n : iterations) check.at_least("iterations", n, 0);
+  check.in_range("finest_width", finest_width, 16, 16384);
+  check.at_least("max_points", max_points, 16);
+  check.positive("depth_noise", depth_noise);
+  check.positive("t_dof", t_dof);
+  check.at_least("depth_weight", depth_weight, 0.0);
+  check.positive("min_depth", min_depth);
+  if (!(max_depth > min_depth)) check.fail("max_depth", "a number > min_depth", max_depth);
+  check.at_least("min_step_translation", min_step_translation, 0.0);
+  check.at_least("min_step_rotation", min_step_rotation, 0.0);
+  check.in_range("min_overlap", min_overlap, 0.0, 1.0);
+  check.in_range("min_conditioning", min_conditioning, 0.0, 1.0);
+}
+
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// Central differences of depth where both neighbours are measured, else 0 (a hole's edge is no
+// surface gradient). OpenCV's filters would mix the holes' zeros in.
+void depth_gradients(OdometryFrame::Level& l) {
+  const int w = l.width, h = l.height;
+  l.depth_dx.assign(l.depth.size(), 0.f);
+  l.depth_dy.assign(l.depth.size(), 0.f);
+  for (int y = 1; y + 1 < h; ++y) {
+    for (int x = 1; x + 1 < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const float left = l.depth[i - 1], right = l.depth[i + 1], up = l.depth[i - w], down = l.depth[i + w];
+      if (left > 0 && right > 0) l.depth_dx[i] = 0.5f * (right - left);
+      if (up > 0 && down > 0) l.depth_dy[i] = 0.5f * (down - up);
+    }
+  }
+}
+
+// Picks the reference points of a level: measured pixels inside the depth range, the
+// max_points with the largest gradients (intensity, plus depth relative to its noise).
+void select_points(OdometryFrame::Level& l, const OdometryConfig& c) {
+  std::vector<std::pair<float, int>> scored;
+  scored.reserve(l.depth.size());
+  for (int y = 1; y + 1 < l.height; ++y) {
+    for (int x = 1; x + 1 < l.width; ++x) {
+      const int i = y * l.width + x;
+      const float z = l.depth[i];
+      if (!(z >= c.min_depth && z <= c.max_depth)) continue;
+      const float noise = static_cast<float>(c.depth_noise) * z * z;
+      const float gi = l.intensity_dx[i] * l.intensity_dx[i] + l.intensity_dy[i] * l.intensity_dy[i];
+      const float gz = (l.depth_dx[i] * l.depth_dx[i] + l.depth_dy[i] * l.depth_dy[i]) / (noise * noise);
+      scored.emplace_back(gi * 400.f + 0.01f * std::min(gz, 100.f), i);  // 1/20 intensity ~ 1 noise unit
+    }
+  }
+  const std::size_t keep = std::min(scored.size(), static_cast<std::size_t>(c.max_points));
+  std::nth_element(scored.begin(), scored.begin() + static_cast<std::ptrdiff_t>(keep), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  scored.resize(keep);
+  std::sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  l.points.clear();
+  l.positions.clear();
+  for (const auto& [score, i] : scored) {
+    const float z = l.depth[i];
+    const float u = static_cast<float>(i % l.width) + 0.5f, v = static_cast<float>(i / l.width) + 0.5f;
+    l.points.push_back(i);
+    l.positions.emplace_back(static_cast<float>((u - l.cx) / l.fx) * z, static_cast<float>((v - l.cy) / l.fy) * z, z);
+  }
+}
+
+struct Sample {
+  float intensity, gx, gy;
+  float depth, zx, zy;  // depth 0: no depth residual here
+};
+
+// Bilinear sample at array coordinates (x, y) (pixel centres at integers), which must satisfy
+// 0 <= x < w - 1 and 0 <= y < h - 1. Depth only where the four neighbours are measured and agree
+// within 5% (across a depth edge an interpolated depth belongs to no surface).
+Sample sample(const OdometryFrame::Level& l, float x, float y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
+  const std::size_t i = static_cast<std::size_t>(y0) * l.width + x0, j = i + l.width;
+  const float w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+  auto lerp = [&](const std::vector<float>& v) { return w00 * v[i] + w10 * v[i + 1] + w01 * v[j] + w11 * v[j + 1]; };
+  Sample s{lerp(l.intensity), lerp(l.intensity_dx), lerp(l.intensity_dy), 0, 0, 0};
+  const float d00 = l.depth[i], d10 = l.depth[i + 1], d01 = l.depth[j], d11 = l.depth[j + 1];
+  const float lo = std::min({d00, d10, d01, d11}), hi = std::max({d00, d10, d01, d11});
+  if (lo > 0 && hi - lo < 0.05f * lo) {
+    s.depth = lerp(l.depth);
+    s.zx = lerp(l.depth_dx);
+    s.zy = lerp(l.depth_dy);
+  }
+  return s;
+}
+
+// The scale of t-distributed residuals (DVO's fixed point), given their squares.
+double t_scale(const std::vector<float>& squares, double dof) {
+  if (squares.empty()) return 1;
+  double variance = 0;
+  for (float r2 : squares) variance += r2;
+  variance = std::max(variance / static_cast<double>(squares.size()), 1e-12);
+  for (int k = 0; k < 5; ++k) {
+    double sum = 0;
+    for (float r2 : squares) sum += r2 * (dof + 1) / (dof + r2 / variance);
+    variance = std::max(sum / static_cast<double>(squares.size()), 1e-12);
+  }
+  return std::sqrt(variance);
+}
+
+struct Normal {
+  Matrix6d h = Matrix6d::Zero();
+  Vector6d b = Vector6d::Zero();
+  double cost = 0;
+  std::size_t seen = 0;  // points with a depth sample in the current frame
+};
+
+// One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
+// t-distribution scales are estimated from these residuals first; otherwise the given ones are
+// used, so that costs at two poses compare. The cost is the mean robust cost per term.
+Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur, const Eigen::Isometry3d& T,
+                 const OdometryConfig& c, double& intensity_scale, double& depth_scale, bool estimate) {
+  const Eigen::Matrix3f r = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  const float fx = static_cast<float>(cur.fx), fy = static_cast<float>(cur.fy);
+  const float cx = static_cast<float>(cur.cx) - 0.5f, cy = static_cast<float>(cur.cy) - 0.5f;
+  const std::size_t n = ref.points.size();
+  struct Term {
+    Eigen::Matrix<float, 6, 1> j;
+    float r;
+  };
+  std::vector<Term> photometric, geometric;
+  photometric.reserve(n);
+  geometric.reserve(n);
+  Normal out;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3f p = r * ref.positions[k] + t;
+    if (!(p.z() > static_cast<float>(c.min_depth))) continue;
+    const float inv_z = 1.f / p.z();
+    const float x = fx * p.x() * inv_z + cx, y = fy * p.y() * inv_z + cy;
+    if (!(x >= 0 && y >= 0 && x < static_cast<float>(cur.width - 1) && y < static_cast<float>(cur.height - 1))) continue;
+    const Sample s = sample(cur, x, y);
+    // d(pixel)/d(p) and d(p)/d(xi) = [I | -[p]x] for the left perturbation.
+    const float dux_dx = fx * inv_z, dux_dz = -fx * p.x() * inv_z * inv_z;
+    const float duy_dy = fy * inv_z, duy_dz = -fy * p.y() * inv_z * inv_z;
+    auto chain = [&](float gu, float gv, float gz_direct) {
+      // g . d(pixel)/dp + gz_direct * d(p.z)/dp, as a gradient with respect to p...
+      const Eigen::Vector3f g(gu * dux_dx, gv * duy_dy, gu * dux_dz + gv * duy_dz + gz_direct);
+      // ...then through d(p)/d(xi): translation part g, rotation part p x g.
+      Eigen::Matrix<float, 6, 1> j;
+      j.head<3>() = g;
+      j.tail<3>() = p.cross(g);
+      return j;
+    };
+    const float r_intensity = s.intensity - ref.intensity[ref.points[k]];
+    photometric.push_back({chain(s.gx, s.gy, 0.f), r_intensity});
+    if (s.depth > 0) {
+      ++out.seen;
+      const float noise = static_cast<float>(c.depth_noise) * p.z() * p.z();
+      geometric.push_back({chain(s.zx, s.zy, -1.f) / noise, (s.depth - p.z()) / noise});
+    }
+  }
+  // Points that leave the image (or land on no depth) cost as much as a residual of three
+  // scales: otherwise a step that pushes points out of view would look like an improvement.
+  const double lost_cost = std::log1p(9 / c.t_dof);
+  auto accumulate = [&](const std::vector<Term>& terms, double weight, double& scale) {
+    std::vector<float> squares(terms.size());
+    for (std::size_t k = 0; k < terms.size(); ++k) squares[k] = terms[k].r * terms[k].r;
+    if (estimate) scale = t_scale(squares, c.t_dof);
+    const double inv_var = 1 / (scale * scale);
+    Eigen::Matrix<float, 6, 6> h = Eigen::Matrix<float, 6, 6>::Zero();
+    Eigen::Matrix<float, 6, 1> b = Eigen::Matrix<float, 6, 1>::Zero();
+    double cost = 0;
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      const double u = squares[k] * inv_var;
+      const float w = static_cast<float>((c.t_dof + 1) / (c.t_dof + u) * inv_var);
+      h.selfadjointView<Eigen::Upper>().rankUpdate(terms[k].j, w);
+      b += w * terms[k].r * terms[k].j;
+      cost += std::log1p(u / c.t_dof);  // the t-distribution's negative log-likelihood, up to constants
+    }
+    out.h += weight * h.selfadjointView<Eigen::Upper>().toDenseMatrix().cast<double>();
+    out.b += weight * b.cast<double>();
+    cost += lost_cost * static_cast<double>(n - terms.size());
+    out.cost += weight * cost / std::max<double>(1, static_cast<double>(n));
+  };
+  accumulate(photometric, 1.0, intensity_scale);
+  if (c.depth_weight > 0) accumulate(geometric, c.depth_weight, depth_scale);
+  return out;
+}
+
+}  // namespace
+
+std::vector<int> OdometryFrame::factors(int width, const OdometryConfig& config) {
+  int finest = 1;
+  while (width / finest > config.finest_width) finest *= 2;
+  std::vector<int> out;
+  for (std::size_t level = 0; level < config.iterations.size(); ++level) {
+    out.insert(out.begin(), finest << level);
+  }
+  return out;
+}
+
+OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config) : timestamp_(frame.timestamp) {
+  config.validate();
+  const std::size_t pixels = static_cast<std::size_t>(frame.width()) * frame.height();
+  if (frame.rgb.size() != pixels * 3 || frame.depth.size() != pixels) {
+    throw splat::Error("OdometryFrame: frame images do not match its " + std::to_string(frame.width()) + "x" +
+                       std::to_string(frame.height()) + " camera");
+  }
+  // Each level from the previous one where the factors allow (box averages of box averages).
+  splat::RgbdFrame scaled;
+  int scaled_factor = 0;
+  const std::vector<int> pyramid = factors(frame.width(), config);
+  std::vector<int> order(pyramid.rbegin(), pyramid.rend());  // finest first
+  std::vector<Level> finest_first;
+  for (int factor : order) {
+    if (scaled_factor > 0 && factor % scaled_factor == 0) {
+      scaled = splat::downsample(scaled, factor / scaled_factor);
+    } else {
+      scaled = splat::downsample(frame, factor);
+    }
+    scaled_factor = factor;
+    Level l;
+    l.width = scaled.width();
+    l.height = scaled.height();
+    l.fx = scaled.camera.fx, l.fy = scaled.camera.fy, l.cx = scaled.camera.cx, l.cy = scaled.camera.cy;
+    if (l.width < 4 || l.height < 4) {
+      throw splat::Error("OdometryFrame: pyramid factor " + std::to_string(factor) + " leaves a " +
+                         std::to_string(l.width) + "x" + std::to_string(l.height) + " image");
+    }
+    const cv::Mat rgb(l.height, l.width, CV_32FC3, scaled.rgb.data());
+    cv::Mat grey;
+    cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
+    l.intensity.assign(grey.ptr<float>(), grey.ptr<float>() + grey.total());
+    cv::Mat gx, gy;
+    cv::Sobel(grey, gx, CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+    cv::Sobel(grey, gy, CV_32F, 0, 1, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+    l.intensity_dx.assign(gx.ptr<float>(), gx.ptr<float>() + gx.total());
+    l.intensity_dy.assign(gy.ptr<float>(), gy.ptr<float>() + gy.total());
+    l.depth = scaled.depth;
+    depth_gradients(l);
+    select_points(l, config);
+    finest_first.push_back(std::move(l));
+  }
+  levels_.assign(std::make_move_iterator(finest_first.rbegin()), std::make_move_iterator(finest_first.rend()));
+}
+
+OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& current,
+                          const Eigen::Isometry3d& initial_T_cur_ref, const OdometryConfig& config) {
+  config.validate();
+  const std::size_t levels = config.iterations.size();
+  if (reference.levels().size() != levels || current.levels().size() != levels ||
+      reference.levels().back().width != current.levels().back().width) {
+    throw splat::Error("align_rgbd: the frames were prepared for another pyramid (" +
+                       std::to_string(reference.levels().size()) + " and " + std::to_string(current.levels().size()) +
+                       " levels, expected " + std::to_string(levels) + ", of equal sizes)");
+  }
+  OdometryResult result;
+  Eigen::Isometry3d T = initial_T_cur_ref;
+  for (std::size_t level = 0; level < levels; ++level) {
+    const OdometryFrame::Level& ref = reference.levels()[level];
+    const OdometryFrame::Level& cur = current.levels()[level];
+    const bool finest = level + 1 == levels;
+    double intensity_scale = 0, depth_scale = 0;
+    Normal normal = linearize(ref, cur, T, config, intensity_scale, depth_scale, true);
+    double lambda = 0;  // Levenberg-Marquardt damping, raised only when a step fails
+    for (int it = 0; it < config.iterations[level]; ++it) {
+      Matrix6d h = normal.h;
+      h.diagonal() *= 1 + lambda;
+      const Vector6d delta = h.ldlt().solve(-normal.b);
+      if (!delta.allFinite()) break;
+      const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * T);
+      const Normal next = linearize(ref, cur, candidate, config, intensity_scale, depth_scale, false);
+      ++result.iterations;
+      if (next.cost <= normal.cost) {
+        T = candidate;
+        normal = next;
+        lambda *= 0.25;
+        if (delta.head<3>().norm() < config.min_step_translation && delta.tail<3>().norm() < config.min_step_rotation) break;
+      } else if (lambda > 1e4) {
+        break;  // no step lowers the cost: converged as far as this level allows
+      } else {
+        lambda = lambda == 0 ? 1e-3 : lambda * 10;
+      }
+    }
+    if (finest) {
+      result.information = normal.h;
+      result.overlap = ref.points.empty() ? 0 : static_cast<double>(normal.seen) / static_cast<double>(ref.points.size());
+      result.intensity_scale = intensity_scale;
+      result.depth_scale = depth_scale;
+    }
+  }
+  result.T_cur_ref = T;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(result.information);
+  const double largest = eigen.eigenvalues().maxCoeff(), smallest = eigen.eigenvalues().minCoeff();
+  if (!T.matrix().allFinite()) {
+    result.reason = "the estimate is not finite";
+  } else if (result.overlap < config.min_overlap) {
+    result.reason = "overlap " + std::to_string(result.overlap) + " below " + std::to_string(config.min_overlap);
+  } else if (!(largest > 0) || smallest < config.min_conditioning * largest) {
+    result.reason = "degenerate: geometry and texture do not constrain every direction of motion";
+  }
+  result.converged = result.reason.empty();
+  return result;
+}
+
+}  // namespace tracking
