@@ -1,6 +1,8 @@
 #include "commands/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
 
 #include "splat/error.h"
 
@@ -12,12 +14,24 @@
 namespace app {
 namespace {
 
+// A finite number above zero (CLI11's PositiveNumber lets NaN through).
+const CLI::Validator kPositiveFinite(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || !(v > 0)) {
+        return "expected a finite number > 0, got '" + text + "'";
+      }
+      return {};
+    },
+    "POSITIVE");
+
 void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--backend", choice.backend, "Rasterizer: auto, cpu or vulkan")
       ->check(CLI::IsMember({"auto", "cpu", "vulkan"}))
       ->capture_default_str();
   cmd.add_option("--device", choice.device, "Vulkan device index (default: best available)");
-  cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->capture_default_str();
+  cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->check(CLI::Range(0, 256))->capture_default_str();
 }
 
 }  // namespace
@@ -47,7 +61,7 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_flag("--print-config", recon.print_config, "Write the effective SLAM configuration (defaults and --config) as JSON and stop");
   recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
-  recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
   add_backend_options(*recon_cmd, recon.backend);
 
@@ -56,7 +70,7 @@ int run_cli(int argc, char** argv) {
   eval_cmd->add_option("run", eval.run, "Output directory of gslam reconstruct")->required();
   eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth)")->required();
   eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
-  eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   eval_cmd->add_flag("--sim3", eval.sim3, "Align with scale (similarity) instead of rigidly");
   eval_cmd->add_option("--every", eval.every, "Measure rendering quality on every N-th frame")->capture_default_str();
   add_backend_options(*eval_cmd, eval.backend);
@@ -70,7 +84,7 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")->capture_default_str();
   live_cmd->add_option("--max-frames", live.dataset_options.max_frames, "Stop after tracking N frames");
   live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
-  live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)");
+  live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   live_cmd->add_option("--idle-timeout", live.watch_options.idle_timeout, "--watch: seconds without frames that end the stream")->capture_default_str();
   live_cmd->add_option("--checkpoint-seconds", live.checkpoint_seconds, "Rewrite the outputs this often")->capture_default_str();
   live_cmd->add_option("--config", live.config, "JSON file with SLAM settings");

@@ -134,6 +134,10 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
     }
   }
   write_json(out_ / "summary.json", summary(map, keyframes, true));
+  if (map.empty()) {
+    throw splat::Error(input_ + ": nothing was reconstructed: no frame of " + std::to_string(records_.size()) +
+                       " had usable depth (" + std::to_string(failures_) + " untracked)");
+  }
 }
 
 }  // namespace app

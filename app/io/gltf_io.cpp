@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <optional>
 
 #include <Eigen/Geometry>
 #include <tiny_gltf.h>
@@ -47,31 +48,65 @@ double decode_component(const unsigned char* p, int component_type, bool normali
   }
 }
 
-// Decodes accessor `index` into floats, checking its type has `components` per element.
-std::vector<float> read_accessor(const tinygltf::Model& model, int index, int components,
-                                 const std::string& what, const std::filesystem::path& path) {
-  if (index < 0 || index >= static_cast<int>(model.accessors.size())) {
-    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+// Element `index` of `list`, or a one-line error naming what refers to it.
+template <typename T>
+const T& element(const std::vector<T>& list, int index, const std::string& what, const std::filesystem::path& path) {
+  if (index < 0 || static_cast<std::size_t>(index) >= list.size()) {
+    fail(path, what + " " + std::to_string(index) + " does not exist (" + std::to_string(list.size()) + " defined)");
   }
-  const tinygltf::Accessor& a = model.accessors[static_cast<std::size_t>(index)];
+  return list[static_cast<std::size_t>(index)];
+}
+
+// a + b and a * b, failing with `what` on overflow (crafted offsets and counts near 2^64).
+uint64_t add_checked(uint64_t a, uint64_t b, const std::string& what, const std::filesystem::path& path) {
+  uint64_t r = 0;
+  if (__builtin_add_overflow(a, b, &r)) fail(path, what + " overflows 64 bits");
+  return r;
+}
+uint64_t mul_checked(uint64_t a, uint64_t b, const std::string& what, const std::filesystem::path& path) {
+  uint64_t r = 0;
+  if (__builtin_mul_overflow(a, b, &r)) fail(path, what + " overflows 64 bits");
+  return r;
+}
+
+// Decodes accessor `index` into floats, checking its type has `components` per element and
+// that it holds `expected` elements where given (every attribute has one per splat). Every
+// size is checked against the bytes that exist before anything is allocated; an accessor
+// without a buffer view (all zeros) must have an expected count to be bounded by.
+std::vector<float> read_accessor(const tinygltf::Model& model, int index, int components, const std::string& what,
+                                 const std::filesystem::path& path, std::optional<std::size_t> expected = {}) {
+  const tinygltf::Accessor& a = element(model.accessors, index, what + ": accessor", path);
+  const std::string name = what + ": accessor " + std::to_string(index);
   const int got = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
   if (got != components) {
-    fail(path, what + ": accessor " + std::to_string(index) + " has " + std::to_string(got) +
-                   " components, expected " + std::to_string(components));
+    fail(path, name + " has " + std::to_string(got) + " components, expected " + std::to_string(components));
   }
-  std::vector<float> out(a.count * static_cast<std::size_t>(components), 0.f);
-  if (a.bufferView < 0) return out;  // glTF: an accessor without a view is all zeros
-  const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(a.bufferView));
-  const tinygltf::Buffer& buffer = model.buffers.at(static_cast<std::size_t>(view.buffer));
+  if (expected && a.count != *expected) {
+    fail(path, name + " has " + std::to_string(a.count) + " elements, expected " + std::to_string(*expected) + " (one per splat)");
+  }
+  const uint64_t values = mul_checked(a.count, static_cast<uint64_t>(components), name + " count", path);
+  if (a.bufferView < 0) {
+    if (!expected) fail(path, name + " has no buffer view (no data)");
+    return std::vector<float>(values, 0.f);  // glTF: an accessor without a view is all zeros
+  }
+  const tinygltf::BufferView& view = element(model.bufferViews, a.bufferView, name + ": buffer view", path);
+  const tinygltf::Buffer& buffer = element(model.buffers, view.buffer, name + ": buffer", path);
   const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
-  if (component_size <= 0) fail(path, what + ": unsupported component type " + std::to_string(a.componentType));
-  const std::size_t element_size = static_cast<std::size_t>(component_size * components);
-  const std::size_t stride = view.byteStride > 0 ? view.byteStride : element_size;
-  const std::size_t start = view.byteOffset + a.byteOffset;
-  if (a.count > 0 && (start + stride * (a.count - 1) + element_size > buffer.data.size() ||
-                      a.byteOffset + stride * (a.count - 1) + element_size > view.byteLength)) {
-    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  if (component_size <= 0) fail(path, name + ": unsupported component type " + std::to_string(a.componentType));
+  const uint64_t element_size = static_cast<uint64_t>(component_size) * static_cast<uint64_t>(components);
+  const uint64_t stride = view.byteStride > 0 ? view.byteStride : element_size;
+  if (stride < element_size) fail(path, name + ": byte stride " + std::to_string(stride) + " is smaller than an element");
+  if (add_checked(view.byteOffset, view.byteLength, name + ": view end", path) > buffer.data.size()) {
+    fail(path, name + ": its buffer view ends past its buffer's " + std::to_string(buffer.data.size()) + " bytes");
   }
+  if (a.count > 0) {
+    const uint64_t span = add_checked(mul_checked(stride, a.count - 1, name + " extent", path), element_size, name + " extent", path);
+    if (add_checked(a.byteOffset, span, name + " end", path) > view.byteLength) {
+      fail(path, name + " reads past the end of its buffer view");
+    }
+  }
+  const std::size_t start = static_cast<std::size_t>(view.byteOffset + a.byteOffset);
+  std::vector<float> out(values, 0.f);
   for (std::size_t e = 0; e < a.count; ++e) {
     for (int c = 0; c < components; ++c) {
       const double v = decode_component(buffer.data.data() + start + e * stride +
@@ -84,6 +119,37 @@ std::vector<float> read_accessor(const tinygltf::Model& model, int index, int co
     }
   }
   return out;
+}
+
+// File access for .gltf files: only files inside the glTF's own folder (no absolute paths,
+// no "..", no symbolic link that leads out).
+struct FolderJail {
+  std::filesystem::path root;  // canonical
+  bool inside(const std::string& file) const {
+    std::error_code ec;
+    const std::filesystem::path resolved = std::filesystem::weakly_canonical(file, ec);
+    if (ec) return false;
+    const auto [root_end, ignored] = std::mismatch(root.begin(), root.end(), resolved.begin(), resolved.end());
+    return root_end == root.end();
+  }
+};
+bool any_exists(const std::string& file, void*) {
+  return tinygltf::FileExists(file, nullptr);  // jailed_read refuses, saying why
+}
+bool jailed_read(std::vector<unsigned char>* out, std::string* err, const std::string& file, void* jail) {
+  if (!static_cast<FolderJail*>(jail)->inside(file)) {
+    if (err) *err += "'" + file + "' is outside the glTF's folder; only files beside it may be read";
+    return false;
+  }
+  return tinygltf::ReadWholeFile(out, err, file, nullptr);
+}
+bool no_writes(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "writing is not allowed while reading";
+  return false;
+}
+// Images are never decoded: splats do not use them, and a crafted header could ask for gigabytes.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
 }
 
 Eigen::Matrix4d node_local_matrix(const tinygltf::Node& node) {
@@ -119,14 +185,9 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
   if (prim.mode != TINYGLTF_MODE_POINTS) fail(path, where + " has mode " + std::to_string(prim.mode) + ", expected 0 (POINTS)");
   out.positions = read_accessor(model, required("POSITION"), 3, where + " POSITION", path);
   const std::size_t n = out.positions.size() / 3;
-  out.rotations_xyzw = read_accessor(model, required(std::string(kPrefix) + "ROTATION"), 4, where + " ROTATION", path);
-  out.log_scales = read_accessor(model, required(std::string(kPrefix) + "SCALE"), 3, where + " SCALE", path);
-  out.opacities = read_accessor(model, required(std::string(kPrefix) + "OPACITY"), 1, where + " OPACITY", path);
-  for (const auto& [label, size] : {std::pair{"ROTATION", out.rotations_xyzw.size() / 4},
-                                    {"SCALE", out.log_scales.size() / 3},
-                                    {"OPACITY", out.opacities.size()}}) {
-    if (size != n) fail(path, where + " " + label + " has " + std::to_string(size) + " splats, POSITION has " + std::to_string(n));
-  }
+  out.rotations_xyzw = read_accessor(model, required(std::string(kPrefix) + "ROTATION"), 4, where + " ROTATION", path, n);
+  out.log_scales = read_accessor(model, required(std::string(kPrefix) + "SCALE"), 3, where + " SCALE", path, n);
+  out.opacities = read_accessor(model, required(std::string(kPrefix) + "OPACITY"), 1, where + " OPACITY", path, n);
 
   // SH degree: the highest degree whose coefficients are all present; partial degrees fail.
   std::vector<std::vector<float>> coeffs;
@@ -140,8 +201,7 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
     if (present != count) fail(path, where + " defines " + std::to_string(present) + " of the " + std::to_string(count) + " SH degree " + std::to_string(degree) + " coefficients");
     for (int c = 0; c < count; ++c) {
       const std::string key = std::string(kPrefix) + "SH_DEGREE_" + std::to_string(degree) + "_COEF_" + std::to_string(c);
-      coeffs.push_back(read_accessor(model, required(key), 3, where + " " + key, path));
-      if (coeffs.back().size() != n * 3) fail(path, where + " " + key + " has the wrong splat count");
+      coeffs.push_back(read_accessor(model, required(key), 3, where + " " + key, path, n));
     }
     out.sh_degree = degree;
     (void)first;
@@ -149,9 +209,9 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
   if (coeffs.empty()) {
     const int color = attribute("COLOR_0");
     if (color < 0) fail(path, where + " has neither SH_DEGREE_0_COEF_0 nor COLOR_0");
-    const auto& accessor = model.accessors.at(static_cast<std::size_t>(color));
+    const auto& accessor = element(model.accessors, color, where + " COLOR_0: accessor", path);
     const int components = accessor.type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
-    const std::vector<float> rgba = read_accessor(model, color, components, where + " COLOR_0", path);
+    const std::vector<float> rgba = read_accessor(model, color, components, where + " COLOR_0", path, n);
     std::vector<float> dc(n * 3);
     // COLOR_0 holds the diffuse colour SH_0 * C0 + 0.5; invert it.
     for (std::size_t i = 0; i < n; ++i)
@@ -200,15 +260,19 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
   return out;
 }
 
+// Walks each node once: glTF nodes form disjoint trees, so a node reached twice (a cycle, or a
+// graph sharing children, which would be walked exponentially often) is an error.
 void visit_nodes(const tinygltf::Model& model, int index, const Eigen::Matrix4d& parent,
-                 const std::filesystem::path& path, GltfSplatScene& scene, int depth) {
-  if (index < 0 || index >= static_cast<int>(model.nodes.size())) fail(path, "node " + std::to_string(index) + " does not exist");
-  if (depth > 64) fail(path, "node hierarchy deeper than 64 (a cycle?)");
-  const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(index)];
+                 const std::filesystem::path& path, GltfSplatScene& scene, std::vector<uint8_t>& visited, int depth) {
+  const tinygltf::Node& node = element(model.nodes, index, "node", path);
+  if (visited[static_cast<std::size_t>(index)]) {
+    fail(path, "node " + std::to_string(index) + " is reached twice; glTF nodes must form trees");
+  }
+  visited[static_cast<std::size_t>(index)] = 1;
+  if (depth > 64) fail(path, "node hierarchy deeper than 64");
   const Eigen::Matrix4d world = parent * node_local_matrix(node);
   if (node.mesh >= 0) {
-    if (node.mesh >= static_cast<int>(model.meshes.size())) fail(path, "node " + std::to_string(index) + " refers to missing mesh " + std::to_string(node.mesh));
-    const tinygltf::Mesh& mesh = model.meshes[static_cast<std::size_t>(node.mesh)];
+    const tinygltf::Mesh& mesh = element(model.meshes, node.mesh, "node " + std::to_string(index) + ": mesh", path);
     for (const auto& prim : mesh.primitives) {
       const bool splat = prim.extensions.count(kExtension) > 0 ||
                          prim.attributes.count(std::string(kPrefix) + "ROTATION") > 0;
@@ -217,7 +281,7 @@ void visit_nodes(const tinygltf::Model& model, int index, const Eigen::Matrix4d&
       scene.primitives.push_back(decode_primitive(model, prim, world, name, path, scene.notices));
     }
   }
-  for (int child : node.children) visit_nodes(model, child, world, path, scene, depth + 1);
+  for (int child : node.children) visit_nodes(model, child, world, path, scene, visited, depth + 1);
 }
 
 }  // namespace
@@ -225,6 +289,9 @@ void visit_nodes(const tinygltf::Model& model, int index, const Eigen::Matrix4d&
 GltfSplatScene read_gltf_splats(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path)) fail(path, "cannot open file");
   tinygltf::TinyGLTF loader;
+  FolderJail jail{std::filesystem::weakly_canonical(std::filesystem::absolute(path).parent_path())};
+  loader.SetFsCallbacks({&any_exists, &tinygltf::ExpandFilePath, &jailed_read, &no_writes, &jail});
+  loader.SetImageLoader(&skip_image, nullptr);
   tinygltf::Model model;
   std::string err, warn;
   const bool binary = path.extension() == ".glb";
@@ -238,12 +305,21 @@ GltfSplatScene read_gltf_splats(const std::filesystem::path& path) {
   GltfSplatScene scene;
   std::vector<int> roots;
   if (!model.scenes.empty()) {
-    const int s = model.defaultScene >= 0 ? model.defaultScene : 0;
-    roots = model.scenes.at(static_cast<std::size_t>(s)).nodes;
+    roots = element(model.scenes, model.defaultScene >= 0 ? model.defaultScene : 0, "scene", path).nodes;
   } else {
-    for (int i = 0; i < static_cast<int>(model.nodes.size()); ++i) roots.push_back(i);
+    // No scene: every node that is no other node's child is a root.
+    std::vector<uint8_t> child(model.nodes.size(), 0);
+    for (const tinygltf::Node& node : model.nodes) {
+      for (int c : node.children) {
+        if (c >= 0 && static_cast<std::size_t>(c) < child.size()) child[static_cast<std::size_t>(c)] = 1;
+      }
+    }
+    for (int i = 0; i < static_cast<int>(model.nodes.size()); ++i) {
+      if (!child[static_cast<std::size_t>(i)]) roots.push_back(i);
+    }
   }
-  for (int root : roots) visit_nodes(model, root, Eigen::Matrix4d::Identity(), path, scene, 0);
+  std::vector<uint8_t> visited(model.nodes.size(), 0);
+  for (int root : roots) visit_nodes(model, root, Eigen::Matrix4d::Identity(), path, scene, visited, 0);
   if (scene.primitives.empty()) fail(path, "has no KHR_gaussian_splatting primitive");
   return scene;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -80,10 +81,16 @@ Header parse_header(std::istream& in, const std::filesystem::path& path) {
       have_format = true;
     } else if (key == "element") {
       Element e;
-      long long count = -1;
+      std::string count, rest;
       words >> e.name >> count;
-      if (!words || count < 0) fail(path, "header line " + std::to_string(line_no) + ": bad element line '" + line + "'");
-      e.count = static_cast<std::size_t>(count);
+      // A plain decimal integer: "1e3" or "-1" are refused, not read as 1 or wrapped.
+      uint64_t value = 0;
+      const auto [end, error] = std::from_chars(count.data(), count.data() + count.size(), value);
+      if (e.name.empty() || count.empty() || error != std::errc{} || end != count.data() + count.size() || (words >> rest)) {
+        fail(path, "header line " + std::to_string(line_no) + ": element '" + e.name + "' count '" + count +
+                       "' is not a non-negative integer");
+      }
+      e.count = static_cast<std::size_t>(value);
       h.elements.push_back(e);
     } else if (key == "property") {
       if (h.elements.empty()) fail(path, "header line " + std::to_string(line_no) + ": property before any element");
@@ -204,6 +211,21 @@ PlyMap read_ply(const std::filesystem::path& path) {
   const std::size_t n = vertex_it->count;
   const int k = splat::sh_coeff_count(g.sh_degree);
   const std::size_t columns = vertex_it->properties.size();
+  // What the elements declare must fit in the bytes after the header before anything is
+  // allocated: a few bytes of header may claim billions of vertices.
+  const uint64_t file_bytes = std::filesystem::file_size(path);
+  const uint64_t data_bytes = file_bytes - std::min<uint64_t>(file_bytes, static_cast<uint64_t>(header.data_offset));
+  uint64_t needed = 0;
+  for (auto e = header.elements.begin(); e != std::next(vertex_it); ++e) {
+    // Binary: count x stride bytes; ASCII: at least a value and a separator per property.
+    const uint64_t per = header.encoding == Encoding::kAscii ? 2 * std::max<uint64_t>(1, e->properties.size()) : e->stride();
+    uint64_t bytes = 0;
+    if (__builtin_mul_overflow(static_cast<uint64_t>(e->count), per, &bytes) || __builtin_add_overflow(needed, bytes, &needed) ||
+        needed > data_bytes) {
+      fail(path, "truncated: element '" + e->name + "' declares " + std::to_string(e->count) + " entries, but only " +
+                     std::to_string(data_bytes) + " bytes follow the header");
+    }
+  }
 
   // Skip the elements stored before the vertices.
   std::vector<double> row(columns);
@@ -211,7 +233,9 @@ PlyMap read_ply(const std::filesystem::path& path) {
   for (auto e = header.elements.begin(); e != vertex_it; ++e) {
     if (header.encoding == Encoding::kAscii) {
       std::string skip;
-      for (std::size_t i = 0; i < e->count; ++i) std::getline(in, skip);
+      for (std::size_t i = 0; i < e->count; ++i) {
+        if (!std::getline(in, skip)) fail(path, "truncated: element '" + e->name + "' line " + std::to_string(i) + " of " + std::to_string(e->count) + " is missing");
+      }
     } else {
       for (const auto& p : e->properties) {
         if (p.is_list) fail(path, "element '" + e->name + "' before the vertices has a list property; cannot skip it");

@@ -92,8 +92,14 @@ splat::ImageT<T> read_png(const std::filesystem::path& path, int channels,
     png_destroy_read_struct(&png, &info, nullptr);
     fail(path, problem);
   }
-  const int width = static_cast<int>(png_get_image_width(png, info));
-  const int height = static_cast<int>(png_get_image_height(png, info));
+  const png_uint_32 png_width = png_get_image_width(png, info), png_height = png_get_image_height(png, info);
+  // The header is checked before the pixels are allocated: 16384 a side and 64 Mpixels at most.
+  if (png_width > 16384 || png_height > 16384 || uint64_t(png_width) * png_height > (uint64_t(1) << 26)) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    fail(path, "header says " + std::to_string(png_width) + "x" + std::to_string(png_height) +
+                   ", expected at most 16384 a side and 67108864 pixels");
+  }
+  const int width = static_cast<int>(png_width), height = static_cast<int>(png_height);
   image = splat::ImageT<T>(width, height, channels);
   rows.resize(static_cast<std::size_t>(height));
   for (int y = 0; y < height; ++y) {

@@ -28,6 +28,10 @@ std::vector<StampedPose> read_tum_trajectory(const std::filesystem::path& path) 
         throw splat::Error(path.string() + ": line " + std::to_string(line_no) + ": '" + word + "' is not a finite number");
       }
     }
+    if (std::string extra; count == 8 && words >> extra) {
+      throw splat::Error(path.string() + ": line " + std::to_string(line_no) + " has more than 8 values ('" + extra +
+                         "'), expected 8 (timestamp tx ty tz qx qy qz qw)");
+    }
     if (count != 8) {
       throw splat::Error(path.string() + ": line " + std::to_string(line_no) + " has " + std::to_string(count) +
                          " values, expected 8 (timestamp tx ty tz qx qy qz qw)");

@@ -25,6 +25,11 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   result.frames = frames.size();
   if (config_.refine_passes <= 0 || frames.empty()) return result;
   std::vector<Eigen::Isometry3d> T_world_cam = trajectory();
+  std::size_t world_frame = 0;  // the first keyframe's frame: it stays where it defines the world
+  {
+    std::lock_guard lock(mutex_);
+    while (world_frame < frames_.size() && !frames_[world_frame].is_keyframe) ++world_frame;
+  }
   std::vector<mapping::PoseAdam> poses(T_world_cam.size());
   std::vector<std::size_t> order = frames;
   std::mt19937 rng(1);
@@ -45,7 +50,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
       Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
-      mapper_.refine(frame_at(i), T_cam_world, i == 0 ? nullptr : &poses[i], config_.refine_iterations,
+      mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
                      pass < config_.refine_densify_passes);
       T_world_cam[i] = T_cam_world.inverse();
       if (visited) visited(++result.visits, total);
@@ -58,7 +63,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     t.iterations = {config_.relocalize_iterations};
     t.warmup_iterations = 0;
     for (const std::size_t i : frames) {
-      if (i == 0) continue;  // the world frame
+      if (i == world_frame) continue;
       const tracking::TrackingResult r =
           tracking::track_frame(tracking_rasterizer_, mapper_.map(), load(i), T_world_cam[i].inverse(), t);
       if (r.converged) T_world_cam[i] = r.T_cam_world.inverse();
@@ -68,7 +73,9 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   std::lock_guard lock(mutex_);
   map_ = std::move(snapshot);
   // The refined frames keep their keyframe, at the pose the sweep gave them.
-  for (const std::size_t i : frames) frames_[i].T_keyframe_cam = keyframe_world_[frames_[i].keyframe].inverse() * T_world_cam[i];
+  for (const std::size_t i : frames) {
+    if (frames_[i].keyframe != kNoKeyframe) frames_[i].T_keyframe_cam = keyframe_world_[frames_[i].keyframe].inverse() * T_world_cam[i];
+  }
   return result;
 }
 

@@ -1,6 +1,7 @@
 #include "slam/slam_system.h"
 
 #include <chrono>
+#include <cmath>
 
 #ifdef __linux__
 #include <sys/resource.h>
@@ -48,6 +49,7 @@ std::shared_ptr<const splat::Gaussians> SlamSystem::map() const {
 }
 
 Eigen::Isometry3d SlamSystem::pose_of(const FramePose& frame) const {
+  if (frame.keyframe == kNoKeyframe) return Eigen::Isometry3d::Identity();  // before the first keyframe
   return keyframe_world_[frame.keyframe] * frame.T_keyframe_cam;
 }
 
@@ -98,18 +100,39 @@ double SlamSystem::map_keyframe(const KeyframeJob& job) {
   return ms;
 }
 
+namespace {
+// The first frame seeds the map from its depth: one with less than this fraction of its pixels
+// measured (a covered lens, a sensor still starting) is skipped, and the next one tried.
+constexpr double kMinSeedDepthFraction = 0.01;
+
+double measured_fraction(const splat::RgbdFrame& frame) {
+  std::size_t measured = 0;
+  for (float z : frame.depth) measured += z > 0 && std::isfinite(z);
+  return frame.depth.empty() ? 0 : static_cast<double>(measured) / static_cast<double>(frame.depth.size());
+}
+}  // namespace
+
 FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   rethrow_mapping_error();
   FrameRecord record;
+  if (!tracker_.started() && measured_fraction(frame) < kMinSeedDepthFraction) {
+    record.timestamp = frame.timestamp;
+    record.tracked = false;
+    record.reason = "waiting for a first frame with depth: " + std::to_string(100 * measured_fraction(frame)) +
+                    "% of its pixels are measured";
+    std::lock_guard lock(mutex_);
+    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false});
+    record.gaussians = 0;
+    return record;
+  }
   if (!tracker_.started()) {
     record.timestamp = frame.timestamp;
     record.keyframe = true;
     tracker_.start(frame);
   } else {
-    // Threaded, the odometry may track before the first keyframe is mapped: an empty map then.
-    static const splat::Gaussians kNoMap;
+    // Threaded, the odometry may track before the first keyframe is mapped, on an empty map.
     const std::shared_ptr<const splat::Gaussians> snapshot = this->map();
-    const splat::Gaussians& map = snapshot ? *snapshot : kNoMap;
+    const splat::Gaussians& map = *snapshot;
     record = tracker_.track(map, frame, [this](std::size_t k) {
       std::lock_guard lock(mutex_);
       return keyframe_world_[k];
@@ -147,7 +170,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   // Relative to the keyframe as known now (sequential: after mapping moved it).
   frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
                      record.tracked, record.keyframe});
-  record.gaussians = map_ ? map_->size() : 0;
+  record.gaussians = map_->size();
   return record;
 }
 

@@ -58,7 +58,8 @@ class SlamSystem {
   // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.
   void finish();
 
-  // The map as last mapped (never null after the first frame; shared, so a reader keeps it).
+  // The map as last mapped: empty until the first keyframe is, never null; shared, so a reader
+  // keeps it.
   std::shared_ptr<const splat::Gaussians> map() const;
   // Camera-to-world poses of every frame processed so far, with the keyframes' corrections.
   std::vector<Eigen::Isometry3d> trajectory() const;
@@ -83,7 +84,9 @@ class SlamSystem {
                         const std::function<void(std::size_t, std::size_t)>& visited = {});
 
  private:
-  // A frame's pose relative to the keyframe it followed (or itself).
+  // A frame's pose relative to the keyframe it followed (or itself); kNoKeyframe for frames
+  // skipped while waiting for a first frame with depth (pose: identity, not tracked).
+  static constexpr std::size_t kNoKeyframe = static_cast<std::size_t>(-1);
   struct FramePose {
     std::size_t keyframe;
     Eigen::Isometry3d T_keyframe_cam;
@@ -110,7 +113,7 @@ class SlamSystem {
   mutable std::mutex mutex_;  // guards everything below
   std::vector<Eigen::Isometry3d> keyframe_world_;  // T_world_cam per keyframe number
   std::vector<FramePose> frames_;
-  std::shared_ptr<const splat::Gaussians> map_;
+  std::shared_ptr<const splat::Gaussians> map_ = std::make_shared<const splat::Gaussians>();
   MappingTotals totals_;
   std::optional<KeyframeJob> pending_;
   bool busy_ = false, stop_ = false;

@@ -57,6 +57,12 @@ std::pair<int, int> parse_size(const std::string& text) {
       v[1] != std::floor(v[1])) {
     throw splat::Error("size '" + text + "': expected WxH with W and H in 1..16384, for example 640x480");
   }
+  // A render holds some 40 bytes a pixel: 4096x4096 (16.8 Mpixels) stays under 1 GiB.
+  if (v[0] * v[1] > kMaxRenderPixels) {
+    throw splat::Error("size '" + text + "': " + std::to_string(static_cast<long long>(v[0] * v[1])) +
+                       " pixels, expected at most " + std::to_string(static_cast<long long>(kMaxRenderPixels)) +
+                       " (4096x4096)");
+  }
   return {static_cast<int>(v[0]), static_cast<int>(v[1])};
 }
 
@@ -85,7 +91,9 @@ Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& tar
 
 std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
                                          const Eigen::Vector3d& up_in) {
-  if (n < 1) throw splat::Error("orbit: view count is " + std::to_string(n) + ", expected at least 1");
+  if (n < 1 || n > kMaxOrbitViews) {
+    throw splat::Error("orbit: view count is " + std::to_string(n) + ", expected 1 to " + std::to_string(kMaxOrbitViews));
+  }
   if (!(up_in.norm() > 0)) throw splat::Error("orbit: the up vector is zero");
   const Eigen::Vector3d up = up_in.normalized();
   // Two axes spanning the orbit plane.

@@ -21,9 +21,13 @@ struct Intrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   int width = 0, height = 0;
 };
+// Limits on what a command line may ask a render for, so memory stays under 1 GiB.
+inline constexpr double kMaxRenderPixels = 4096.0 * 4096.0;
+inline constexpr int kMaxOrbitViews = 100000;
+
 // Parses "fx,fy,cx,cy,W,H". Throws splat::Error naming the text for anything else.
 Intrinsics parse_intrinsics(const std::string& text);
-// Parses "WxH" (for example 640x480).
+// Parses "WxH" (for example 640x480), at most kMaxRenderPixels.
 std::pair<int, int> parse_size(const std::string& text);
 
 // n cameras on a circle around the map's centre at 2.5 map radii, 25 degrees above the plane

@@ -1,11 +1,28 @@
 #include "splat/thread_pool.h"
 
+#include <string>
+#include <system_error>
+
+#include "splat/error.h"
+
 namespace splat {
 
 ThreadPool::ThreadPool(int threads) {
   int count = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
   if (count < 1) count = 1;
-  for (int i = 1; i < count; ++i) workers_.emplace_back([this] { worker_loop(); });
+  try {
+    for (int i = 1; i < count; ++i) workers_.emplace_back([this] { worker_loop(); });
+  } catch (const std::system_error& e) {
+    // The system refused a thread: stop the ones started (the destructor will not run).
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    for (auto& worker : workers_) worker.join();
+    throw Error("ThreadPool: could not start thread " + std::to_string(workers_.size() + 1) + " of " +
+                std::to_string(count) + ": " + e.what());
+  }
 }
 
 ThreadPool::~ThreadPool() {

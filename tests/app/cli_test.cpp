@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "datasets/synthetic_sequence.h"
 #include "io/image_io.h"
 #include "io/ply_io.h"
 #include "app/run_gslam.h"
@@ -163,6 +164,45 @@ TEST(CliReconstruct, PrintedConfigReadsBackAndBadConfigIsRefusedByName) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("mapping.window: expected an integer"), std::string::npos) << bad.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "run" / "trajectory.txt")) << "nothing runs on a bad config";
+}
+
+}  // namespace
+
+namespace {
+
+// Runs that would produce nothing, or ask for more than the machine has, stop with one line.
+TEST(CliReconstruct, RefusesInputThatWouldReconstructNothing) {
+  TempDir dir;
+  const RunResult nan_scale = run_gslam("reconstruct --out " + (dir / "a").string() + " --depth-scale nan");
+  EXPECT_NE(nan_scale.exit_code, 0);
+  EXPECT_NE(nan_scale.output.find("expected a finite number > 0, got 'nan'"), std::string::npos) << nan_scale.output;
+  const RunResult negative = run_gslam("reconstruct --out " + (dir / "a").string() + " --depth-scale -1");
+  EXPECT_NE(negative.exit_code, 0);
+  EXPECT_NE(negative.output.find("--depth-scale"), std::string::npos) << negative.output;
+  const RunResult threads = run_gslam("reconstruct --out " + (dir / "a").string() + " --threads 1000");
+  EXPECT_NE(threads.exit_code, 0);
+  EXPECT_NE(threads.output.find("--threads"), std::string::npos) << threads.output;
+  // A sequence whose depth is all zero (as a covered sensor gives): an error, not an empty run.
+  app::SyntheticOptions o;
+  o.frames = 4;
+  app::write_synthetic_sequence(dir / "seq", o);
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "seq" / "depth")) {
+    app::write_png_gray16(entry.path(), splat::Image16(o.width, o.height, 1, 0));
+  }
+  const RunResult empty = run_gslam("reconstruct " + (dir / "seq").string() + " --out " + (dir / "run").string());
+  EXPECT_NE(empty.exit_code, 0);
+  EXPECT_NE(empty.output.find("nothing was reconstructed: no frame of 4 had usable depth"), std::string::npos) << empty.output;
+}
+
+TEST(CliRender, RefusesRendersThatWouldNotFitInMemory) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  const RunResult orbit = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "o").string() + " --orbit 100000000");
+  EXPECT_NE(orbit.exit_code, 0);
+  EXPECT_NE(orbit.output.find("view count is 100000000, expected 1 to 100000"), std::string::npos) << orbit.output;
+  const RunResult size = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "o").string() + " --size 16384x16384");
+  EXPECT_NE(size.exit_code, 0);
+  EXPECT_NE(size.output.find("268435456 pixels, expected at most 16777216"), std::string::npos) << size.output;
 }
 
 }  // namespace

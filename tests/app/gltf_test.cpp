@@ -1,4 +1,5 @@
 #include <cmath>
+#include <fstream>
 #include <map>
 
 #include <gtest/gtest.h>
@@ -112,6 +113,81 @@ TEST(GltfFormat, BadInputGivesErrorNamingFileAndElement) {
     "bufferViews": [{"buffer": 0, "byteLength": 12}],
     "accessors": [{"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3"}]})");
   GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "noscale.gltf"), "noscale.gltf", "ROTATION", "components");
+}
+
+// A one-splat .gltf whose JSON is `json` with its buffer in `bin` beside it: crafted files.
+std::filesystem::path write_crafted(const TempDir& dir, const std::string& name, const std::string& json) {
+  std::vector<float> data(12 + 3, 0.f);  // POSITION vec3, ROTATION vec4, SCALE vec3, OPACITY, COLOR_0 vec3 (short)
+  data[6] = 1.f;
+  std::ofstream(dir / "crafted.bin", std::ios::binary).write(reinterpret_cast<const char*>(data.data()), 60);
+  std::ofstream(dir / name) << json;
+  return dir / name;
+}
+
+// The accessors of one splat primitive; `override` replaces a piece of the JSON.
+std::string crafted_json(const std::string& accessors, const std::string& buffer_uri = "crafted.bin",
+                         const std::string& nodes = R"([{"mesh": 0}])") {
+  return R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_gaussian_splatting"],
+    "buffers": [{"uri": ")" + buffer_uri + R"(", "byteLength": 60}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 60}],
+    "accessors": )" + accessors + R"(,
+    "meshes": [{"primitives": [{"mode": 0, "attributes": {"POSITION": 0, "KHR_gaussian_splatting:ROTATION": 1,
+      "KHR_gaussian_splatting:SCALE": 2, "KHR_gaussian_splatting:OPACITY": 3, "COLOR_0": 4},
+      "extensions": {"KHR_gaussian_splatting": {}}}]}],
+    "nodes": )" + nodes + R"(, "scenes": [{"nodes": [0]}], "scene": 0})";
+}
+
+std::string accessors(const std::string& position_count = "1", const std::string& position_offset = "0",
+                      const std::string& color_count = "1") {
+  return R"([{"bufferView": 0, "byteOffset": )" + position_offset + R"(, "componentType": 5126, "count": )" + position_count +
+         R"(, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]},
+    {"bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": 1, "type": "VEC4"},
+    {"bufferView": 0, "byteOffset": 28, "componentType": 5126, "count": 1, "type": "VEC3"},
+    {"bufferView": 0, "byteOffset": 40, "componentType": 5126, "count": 1, "type": "SCALAR"},
+    {"bufferView": 0, "byteOffset": 44, "componentType": 5126, "count": )" + color_count + R"(, "type": "VEC3"}])";
+}
+
+TEST(GltfFormat, CraftedFileIsReadWhenWellFormed) {
+  TempDir dir;
+  const app::GltfSplatScene scene = app::read_gltf_splats(write_crafted(dir, "ok.gltf", crafted_json(accessors())));
+  ASSERT_EQ(scene.primitives.size(), 1u);
+  EXPECT_EQ(scene.primitives[0].opacities.size(), 1u);
+}
+
+// Each reproducer of the hardening issue: a one-line error naming the file and the element.
+TEST(GltfFormat, HostileFilesGiveOneLineErrors) {
+  TempDir dir;
+  // An accessor count whose byte size overflows 64 bits (once a heap overflow).
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "count.gltf", crafted_json(accessors("4611686018427387904")))),
+                     "count.gltf", "POSITION");
+  // A byte offset near 2^64 (once wrapped the bounds check and read before the buffer).
+  GSLAM_EXPECT_ERROR(
+      app::read_gltf_splats(write_crafted(dir, "offset.gltf", crafted_json(accessors("1", "18446744073709551600")))),
+      "offset.gltf", "POSITION");
+  // COLOR_0 shorter than POSITION (once read past its end).
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "color.gltf", crafted_json(accessors("1", "0", "0")))),
+                     "color.gltf", "COLOR_0", "0 elements, expected 1");
+  // A buffer outside the glTF's folder (once read /etc/passwd).
+  GSLAM_EXPECT_ERROR(
+      app::read_gltf_splats(write_crafted(dir, "escape.gltf", crafted_json(accessors(), "../../../../../../etc/passwd"))),
+      "escape.gltf", "outside the glTF's folder");
+  // tinygltf joins an absolute URI to the folder too, so it names a file that does not exist.
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "absolute.gltf", crafted_json(accessors(), "/etc/passwd"))),
+                     "absolute.gltf", "/etc/passwd");
+  std::filesystem::create_symlink("/etc/passwd", dir / "link.bin");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "symlink.gltf", crafted_json(accessors(), "link.bin"))),
+                     "symlink.gltf", "outside the glTF's folder");
+  // A node graph that shares children: node i has children [i+1, i+1], 2^40 walks once.
+  std::string nodes = "[";
+  for (int i = 0; i < 40; ++i) nodes += R"({"mesh": 0, "children": [)" + std::to_string(i + 1) + ", " + std::to_string(i + 1) + "]},";
+  nodes += R"({"mesh": 0}])";
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "dag.gltf", crafted_json(accessors(), "crafted.bin", nodes))),
+                     "dag.gltf", "is reached twice; glTF nodes must form trees");
+  // An index out of range: a message, not vector::_M_range_check.
+  std::string bad_view = accessors();
+  bad_view.replace(bad_view.find(R"("bufferView": 0)"), 15, R"("bufferView": 9)");
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(write_crafted(dir, "view.gltf", crafted_json(bad_view))), "view.gltf",
+                     "buffer view 9 does not exist");
 }
 
 }  // namespace

@@ -104,7 +104,7 @@ TEST(PlyFormat, BadInputGivesErrorNamingFileAndElement) {
   std::ifstream in(dir / "good.ply", std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), {});
   write_text(dir / "truncated.ply", bytes.substr(0, bytes.size() - 10));
-  GSLAM_EXPECT_ERROR(app::read_ply(dir / "truncated.ply"), "truncated.ply", "truncated", "vertex 4 of 5");
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "truncated.ply"), "truncated.ply", "truncated", "'vertex' declares 5 entries");
 
   const std::string header = "ply\nformat ascii 1.0\nelement vertex 1\n";
   const std::string tail =
@@ -118,11 +118,33 @@ TEST(PlyFormat, BadInputGivesErrorNamingFileAndElement) {
   GSLAM_EXPECT_ERROR(app::read_ply(dir / "nan.ply"), "nan.ply", "vertex 0 property 'opacity'", "finite");
   write_text(dir / "missing_prop.ply", header + tail + "2 3 0 0 0 0 0 0 0 1 0 0 0\n");
   GSLAM_EXPECT_ERROR(app::read_ply(dir / "missing_prop.ply"), "vertex property 'x' is missing");
-  write_text(dir / "short.ply", header + "property float x\n" + tail + "1 2 3\n");
+  write_text(dir / "short.ply", header + "property float x\n" + tail + "1 2 3" + std::string(40, ' ') + "\n");
   GSLAM_EXPECT_ERROR(app::read_ply(dir / "short.ply"), "vertex 0 has 3 values, expected 14");
   write_text(dir / "rest.ply", header + "property float x\nproperty float f_rest_0\n" + tail +
                                    "1 2 3 4 0 0 0 0 0 0 0 1 0 0 0\n");
   GSLAM_EXPECT_ERROR(app::read_ply(dir / "rest.ply"), "1 f_rest properties", "SH degree");
+}
+
+// Hostile headers: each is refused from the header and the file's size, before anything is
+// allocated or read (a 3.8 KB file once asked for 5.5 GB; junk elements looped past the end).
+TEST(PlyFormat, HostileHeadersAreRefusedBeforeAllocating) {
+  TempDir dir;
+  const std::string props =
+      "property float x\nproperty float y\nproperty float z\nproperty float f_dc_0\nproperty float f_dc_1\n"
+      "property float f_dc_2\nproperty float opacity\nproperty float scale_0\nproperty float scale_1\n"
+      "property float scale_2\nproperty float rot_0\nproperty float rot_1\nproperty float rot_2\n"
+      "property float rot_3\nend_header\n";
+  write_text(dir / "bomb.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\n" + props + std::string(3800, 'x'));
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "bomb.ply"), "bomb.ply", "'vertex' declares 100000000 entries", "3800 bytes");
+  write_text(dir / "junk.ply", "ply\nformat ascii 1.0\nelement junk 1000000000000\nproperty float a\nelement vertex 1\n" + props +
+                                   "0 0 0 0 0 0 0 0 0 0 1 0 0 0\n");
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "junk.ply"), "junk.ply", "'junk' declares 1000000000000 entries");
+  write_text(dir / "overflow.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 18446744073709551615\n" + props);
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "overflow.ply"), "overflow.ply", "'vertex' declares 18446744073709551615 entries");
+  write_text(dir / "exp.ply", "ply\nformat ascii 1.0\nelement vertex 1e3\n" + props);
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "exp.ply"), "exp.ply", "header line 3", "count '1e3' is not a non-negative integer");
+  write_text(dir / "neg.ply", "ply\nformat ascii 1.0\nelement vertex -1\n" + props);
+  GSLAM_EXPECT_ERROR(app::read_ply(dir / "neg.ply"), "count '-1' is not a non-negative integer");
 }
 
 }  // namespace
