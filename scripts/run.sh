@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 scripts/install_deps.sh
 scripts/build.sh
 out=out/synthetic
-build/app/gslam reconstruct --out "$out"
+build/app/gslam reconstruct --out "$out" --overwrite
 build/app/gslam eval "$out" --dataset "$out/synthetic_input"
 build/app/gslam render "$out/map.ply" --out "$out/views" --trajectory "$out/trajectory.txt" \
   --intrinsics 260,260,160,120,320,240 --format png,exr

@@ -58,6 +58,7 @@ int run_cli(int argc, char** argv) {
   CLI::App* recon_cmd = cli.add_subcommand("reconstruct", "RGB-D SLAM: trajectory and Gaussian map from a sequence");
   recon_cmd->add_option("dataset", recon.dataset, "TUM RGB-D folder (default: the bundled synthetic sequence)");
   recon_cmd->add_option("--out", recon.out, "Output directory (required unless --print-config)");
+  recon_cmd->add_flag("--overwrite", recon.overwrite, "Replace the outputs of another run in --out");
   recon_cmd->add_flag("--print-config", recon.print_config, "Write the effective SLAM configuration (defaults and --config) as JSON and stop");
   recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
@@ -81,6 +82,7 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_option("--out", live.out, "Output directory")->required();
   live_cmd->add_flag("--watch", live.watch, "Take frames written into SOURCE/rgb and SOURCE/depth as they appear");
   live_cmd->add_flag("--headless", live.headless, "No window (robots without a display)");
+  live_cmd->add_flag("--overwrite", live.overwrite, "Replace the outputs of another run in --out");
   live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")->capture_default_str();
   live_cmd->add_option("--max-frames", live.dataset_options.max_frames, "Stop after tracking N frames");
   live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");

@@ -11,6 +11,7 @@
 #include "io/image_io.h"
 #include "io/map_io.h"
 #include "io/plot.h"
+#include "io/run_folder.h"
 #include "commands/progress.h"
 #include "mapping/vignetting.h"
 #include "splat/error.h"
@@ -40,6 +41,15 @@ mapping::Vignetting run_vignetting(const std::filesystem::path& run) {
 }  // namespace
 
 int run_eval(const EvalOptions& o) {
+  // The run's files must all be its own: a trajectory of one run scored against another's map
+  // would be a wrong result with exit 0.
+  {
+    std::ifstream in(o.run / "summary.json");
+    if (!in) throw splat::Error((o.run / "summary.json").string() + ": cannot open file (not a run folder?)");
+    const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+    if (summary.is_discarded()) throw splat::Error((o.run / "summary.json").string() + ": not valid JSON");
+    check_run_manifest(o.run, summary);
+  }
   const Dataset dataset = open_dataset(o.dataset, o.dataset_options);
   if (!dataset.has_ground_truth()) throw splat::Error(o.dataset.string() + ": the dataset has no ground truth");
   const std::vector<StampedPose> estimate = read_tum_trajectory(o.run / "trajectory.txt");

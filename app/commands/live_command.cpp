@@ -1,8 +1,11 @@
 #include "commands/live_command.h"
 
+#include "commands/interrupt.h"
+
 #include <algorithm>
 #include <atomic>
 #include <csignal>
+#include <optional>
 #include <cstdio>
 #include <deque>
 #include <mutex>
@@ -22,9 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Set by SIGINT/SIGTERM: the run stops taking frames and writes its outputs.
-volatile std::sig_atomic_t g_interrupted = 0;
-void on_signal(int) { g_interrupted = 1; }
 
 // Latencies of the most recent frames (bounded, so a long session does not grow memory).
 class LatencyWindow {
@@ -91,16 +91,15 @@ int run_live(const LiveOptions& o) {
   std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, o.watch_options)
                                                 : make_replay_source(std::move(*dataset), o.speed);
   std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
-  RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer);
+  RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer, o.overwrite);
   Shared shared;
   LatencyWindow latency;
   std::vector<StampedPose> truth;
   std::size_t paused_dropped = 0;
   const std::size_t max_frames =
       o.dataset_options.max_frames > 0 ? std::size_t(o.dataset_options.max_frames) : 0;
-  g_interrupted = 0;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  // SIGINT/SIGTERM: the run stops taking frames and writes its outputs.
+  std::optional<InterruptGuard> interrupt(std::in_place);
 
   // Outputs with the poses as mapping has corrected them so far.
   auto checkpoint = [&] {
@@ -113,7 +112,7 @@ int run_live(const LiveOptions& o) {
   auto pipeline = [&] {
     Progress progress("live", 0, "frames");
     Clock::time_point last_checkpoint = Clock::now();
-    while (!shared.stop && !g_interrupted) {
+    while (!shared.stop && !InterruptGuard::interrupted()) {
       std::optional<ArrivedFrame> arrived = source->next(std::chrono::milliseconds(100));
       if (!arrived) {
         if (source->finished()) break;
@@ -201,7 +200,7 @@ int run_live(const LiveOptions& o) {
         tracked = shared.tracked;
         done = shared.done;
       }
-      if (window->closed() || g_interrupted) shared.stop = true;
+      if (window->closed() || InterruptGuard::interrupted()) shared.stop = true;
       const bool last = done || shared.stop;  // draw once more, then leave
       // The screenshot once enough frames are tracked and mapping has published a map, or at
       // the end if the stream was shorter.
@@ -230,8 +229,8 @@ int run_live(const LiveOptions& o) {
     }
     worker.join();
   }
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  const bool interrupted = InterruptGuard::interrupted();
+  interrupt.reset();
   live.finish();
   if (error) std::rethrow_exception(error);
 
@@ -245,7 +244,7 @@ int run_live(const LiveOptions& o) {
                              {"tracking_latency_ms", {{"p50", latency.percentile(0.5)}, {"p95", latency.percentile(0.95)}}},
                              {"keyframes_mapped", mapping.keyframes_mapped},
                              {"keyframes_skipped", mapping.keyframes_skipped},
-                             {"interrupted", g_interrupted != 0}};
+                             {"interrupted", interrupted}};
   const std::shared_ptr<const splat::Gaussians> map = live.map();
   const splat::Gaussians empty;
   outputs.finish(map ? *map : empty, live.keyframes(), *tracking_rasterizer, source->intrinsics(), truth);

@@ -17,6 +17,7 @@ struct LiveOptions {
   DatasetOptions dataset_options;  // replay: intrinsics, depth scale, max frames
   double speed = 1;                // replay rate relative to the recording
   bool headless = false;
+  bool overwrite = false;          // replace another run's outputs in `out`
   double checkpoint_seconds = 30;  // outputs rewritten (atomically) this often
   std::filesystem::path config;    // optional SLAM settings (as reconstruct)
   BackendChoice backend;

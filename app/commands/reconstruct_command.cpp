@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "commands/interrupt.h"
 #include "commands/progress.h"
 #include "commands/run_outputs.h"
 #include "io/slam_config_io.h"
@@ -38,10 +39,12 @@ int run_reconstruct(const ReconstructOptions& o) {
   std::fprintf(stderr, "%s\n", note.c_str());
   SlamSystem slam(*rasterizer, config);
 
-  RunOutputs outputs(o.out, input.string(), *rasterizer);
+  RunOutputs outputs(o.out, input.string(), *rasterizer, o.overwrite);
+  // Ctrl-C or SIGTERM: stop taking frames (or end the sweep) and write complete outputs.
+  const InterruptGuard interrupt;
   Progress progress("reconstruct", dataset.entries.size(), "frames");
   const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
-  for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
+  for (std::size_t i = 0; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
     const auto load_start = std::chrono::steady_clock::now();
     const splat::RgbdFrame frame = dataset.load(i);
     const double loading_ms =
@@ -57,24 +60,28 @@ int run_reconstruct(const ReconstructOptions& o) {
   }
   progress.finish();
   const std::size_t refine_frames = slam.refine_frames().size();
-  if (config.refine_passes > 0 && refine_frames > 0) {
+  if (config.refine_passes > 0 && refine_frames > 0 && !InterruptGuard::interrupted()) {
     const std::size_t visits = refine_frames * static_cast<std::size_t>(config.refine_passes);
     Progress refine_progress("refine", visits, "frame visits");
     const SlamSystem::Refinement refined = slam.refine_map(
         [&](std::size_t i) { return dataset.load(i); },
-        [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map()->size()) + " Gaussians"); });
+        [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map()->size()) + " Gaussians"); },
+        [] { return InterruptGuard::interrupted(); });
     refine_progress.finish();
     // The camera's vignetting as the refinement estimated it: gslam eval renders through it.
     const mapping::Vignetting vignetting = slam.vignetting();
     outputs.extra()["vignetting"] = {{"k1", vignetting.k1}, {"k2", vignetting.k2}};
     outputs.extra()["refinement"] = {{"frames", refined.frames}, {"passes", config.refine_passes},
                                      {"iterations_per_visit", config.refine_iterations}, {"pruned", refined.pruned},
+                                     {"visits", refined.visits}, {"stopped_early", refined.stopped},
                                      {"seconds", refine_progress.elapsed_seconds()}};
     std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned\n",
                  refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   outputs.set_mapping(slam.mapping_totals());
+  outputs.extra()["interrupted"] = InterruptGuard::interrupted();
+  if (InterruptGuard::interrupted()) std::fprintf(stderr, "interrupted: writing what was done\n");
   std::vector<StampedPose> truth;
   for (const auto& e : dataset.entries) {
     if (e.T_world_cam_truth) truth.push_back({e.timestamp, *e.T_world_cam_truth});

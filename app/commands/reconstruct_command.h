@@ -14,6 +14,7 @@ struct ReconstructOptions {
   DatasetOptions dataset_options;
   BackendChoice backend;
   bool print_config = false;      // write the effective configuration as JSON and stop
+  bool overwrite = false;         // replace another run's outputs in `out`
   int checkpoint_every = 10;      // frames between atomic trajectory/summary checkpoints;
                                   // map.ply is checkpointed every 5x that
 };

@@ -6,6 +6,7 @@
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
+#include "io/run_folder.h"
 #include "splat/error.h"
 #include "splat/rgbd_frame.h"
 
@@ -29,13 +30,14 @@ double peak_memory_mib() {
 
 }  // namespace
 
-RunOutputs::RunOutputs(std::filesystem::path out, std::string input,
-                       const splat::Rasterizer& rasterizer)
+RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer,
+                       bool overwrite)
     : out_(std::move(out)),
+      run_id_(new_run_id()),
       input_(std::move(input)),
       rasterizer_(rasterizer),
       start_(std::chrono::steady_clock::now()) {
-  std::filesystem::create_directories(out_);
+  prepare_run_folder(out_, overwrite);
 }
 
 double RunOutputs::elapsed_seconds() const {
@@ -69,8 +71,8 @@ void RunOutputs::set_mapping(const MappingTotals& t) {
                        {"seconds", t.mapping_ms / 1000}};
 }
 
-nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes,
-                                   bool complete) const {
+nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes, bool complete,
+                                   const std::vector<std::filesystem::path>& files) const {
   const double seconds = elapsed_seconds();
   const double n = std::max<double>(1, static_cast<double>(records_.size()));
   nlohmann::json j = {
@@ -96,20 +98,24 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
     j["ate_matched_frames"] = errors_.matched;
   }
   j.update(extra_);
+  j["manifest"] = run_manifest(out_, run_id_, files);
   return j;
 }
 
 void RunOutputs::checkpoint(const splat::Gaussians& map, std::size_t keyframes, bool with_map) {
   write_tum_trajectory(out_ / "trajectory.txt", trajectory_);
-  write_json(out_ / "summary.json", summary(map, keyframes, false));
   if (with_map && !map.empty()) save_map(out_ / "map.ply", map);
+  // The map of an earlier checkpoint is this run's too; the manifest lists what is there now.
+  write_json(out_ / "summary.json", summary(map, keyframes, false, {"trajectory.txt", "map.ply"}));
 }
 
 void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
                         splat::Rasterizer& rasterizer, const splat::Camera& intrinsics,
                         const std::vector<StampedPose>& truth) {
   write_tum_trajectory(out_ / "trajectory.txt", trajectory_);
+  std::vector<std::filesystem::path> files = {"trajectory.txt"};
   if (!map.empty()) {
+    files.insert(files.end(), {"map.ply", "map.glb"});
     save_map(out_ / "map.ply", map);
     save_map(out_ / "map.glb", map);
     // The final map seen from every keyframe.
@@ -121,6 +127,8 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
       char name[32];
       std::snprintf(name, sizeof(name), "kf_%04zu", i);
       write_png_rgb(out_ / "keyframes" / (std::string(name) + ".png"), f.width, f.height, f.rgb);
+      files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".png"));
+      files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".exr"));
       write_render_exr(out_ / "keyframes" / (std::string(name) + ".exr"), f.width, f.height, f.rgb,
                        f.alpha, f.depth_normalized);
     }
@@ -133,7 +141,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
       extra_["ate_unavailable"] = e.what();
     }
   }
-  write_json(out_ / "summary.json", summary(map, keyframes, true));
+  write_json(out_ / "summary.json", summary(map, keyframes, true, files));
   if (map.empty()) {
     throw splat::Error(input_ + ": nothing was reconstructed: no frame of " + std::to_string(records_.size()) +
                        " had usable depth (" + std::to_string(failures_) + " untracked)");

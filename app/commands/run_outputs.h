@@ -20,7 +20,9 @@ namespace app {
 
 class RunOutputs {
  public:
-  RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer);
+  // Prepares `out` for this run (io/run_folder.h: refuses another run's outputs unless
+  // `overwrite`, which removes them).
+  RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer, bool overwrite);
 
   // Records one processed frame.
   void add(const FrameRecord& record, double loading_ms);
@@ -42,9 +44,12 @@ class RunOutputs {
   double elapsed_seconds() const;
 
  private:
-  nlohmann::json summary(const splat::Gaussians& map, std::size_t keyframes, bool complete) const;
+  // The summary, with the manifest of `files` (written before it).
+  nlohmann::json summary(const splat::Gaussians& map, std::size_t keyframes, bool complete,
+                         const std::vector<std::filesystem::path>& files) const;
 
   std::filesystem::path out_;
+  std::string run_id_;
   std::string input_;
   const splat::Rasterizer& rasterizer_;
   std::chrono::steady_clock::time_point start_;

@@ -46,6 +46,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"odometry", "depth_weight", &o.depth_weight},
       {"odometry", "min_depth", &o.min_depth},
       {"odometry", "max_depth", &o.max_depth},
+      {"odometry", "max_depth_slope", &o.max_depth_slope},
       {"odometry", "min_step_translation", &o.min_step_translation},
       {"odometry", "min_step_rotation", &o.min_step_rotation},
       {"odometry", "min_overlap", &o.min_overlap},

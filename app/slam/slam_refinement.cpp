@@ -18,7 +18,8 @@ std::vector<std::size_t> SlamSystem::refine_frames() const {
 }
 
 SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,
-                                              const std::function<void(std::size_t, std::size_t)>& visited) {
+                                              const std::function<void(std::size_t, std::size_t)>& visited,
+                                              const std::function<bool()>& stop) {
   finish();  // the mapper is this thread's from here on
   Refinement result;
   const std::vector<std::size_t> frames = refine_frames();
@@ -46,9 +47,13 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     cached_mib += mib;
     return *(cache[i] = std::move(f));
   };
-  for (int pass = 0; pass < config_.refine_passes; ++pass) {
+  for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
+      if (stop && stop()) {
+        result.stopped = true;
+        break;
+      }
       Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
       mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
                      pass < config_.refine_densify_passes);

@@ -35,7 +35,7 @@ app::Dataset synthetic(const gslam::test::TempDir& dir, int frames) {
   return app::open_dataset(dir / "seq");
 }
 
-TEST(RgbdOdometry, AlignsSyntheticFramesFromIdentityToTwoMillimetres) {
+TEST(RgbdOdometry, AlignsSyntheticFramesFromIdentityToThreeMillimetres) {
   gslam::test::TempDir dir;
   const app::Dataset d = synthetic(dir, 30);
   const tracking::OdometryConfig config;
@@ -46,10 +46,11 @@ TEST(RgbdOdometry, AlignsSyntheticFramesFromIdentityToTwoMillimetres) {
     const tracking::OdometryResult r = tracking::align_rgbd(ref, frame, Eigen::Isometry3d::Identity(), config);
     const PoseError before = pose_error(Eigen::Isometry3d::Identity(), truth), after = pose_error(r.T_cur_ref, truth);
     EXPECT_TRUE(r.converged) << r.reason;
-    // The floor is the sampling: 3000 points a level (the default) leave 0.6-1.5 mm here, 20000
-    // leave 0.2 mm.
-    EXPECT_LT(after.translation_m, 2e-3) << "frame " << cur << ", moved " << before.translation_m * 100 << " cm";
-    EXPECT_LT(after.rotation_deg, 0.05) << "frame " << cur << ", turned " << before.rotation_deg << " deg";
+    // The floor is the sampling: 3000 points a level (the default) left 0.6-1.5 mm here, 20000
+    // 0.2 mm; leaving out points at depth edges and holes (the default: on real sequences it
+    // halved teddy's ATE) takes away this noiseless scene's sharpest silhouettes: 1.4-2.5 mm.
+    EXPECT_LT(after.translation_m, 3e-3) << "frame " << cur << ", moved " << before.translation_m * 100 << " cm";
+    EXPECT_LT(after.rotation_deg, 0.08) << "frame " << cur << ", turned " << before.rotation_deg << " deg";
     EXPECT_GT(r.overlap, 0.8);
     std::printf("synthetic 0 -> %zu: motion %.1f cm / %.2f deg, error %.3f mm / %.4f deg, %d iterations\n", cur,
                 before.translation_m * 100, before.rotation_deg, after.translation_m * 1e3, after.rotation_deg, r.iterations);

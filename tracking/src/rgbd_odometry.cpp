@@ -25,6 +25,7 @@ void OdometryConfig::validate(const std::string& prefix) const {
   check.positive("t_dof", t_dof);
   check.at_least("depth_weight", depth_weight, 0.0);
   check.positive("min_depth", min_depth);
+  check.positive("max_depth_slope", max_depth_slope);
   if (!(max_depth > min_depth)) check.fail("max_depth", "a number > min_depth", max_depth);
   check.at_least("min_step_translation", min_step_translation, 0.0);
   check.at_least("min_step_rotation", min_step_rotation, 0.0);
@@ -63,6 +64,15 @@ void select_points(OdometryFrame::Level& l, const OdometryConfig& c) {
       const int i = y * l.width + x;
       const float z = l.depth[i];
       if (!(z >= c.min_depth && z <= c.max_depth)) continue;
+      // Not at a depth edge or next to a hole: there the depth is mixed or missing, colour and
+      // depth disagree most (unregistered sensors, shadows), and the depth residual is ill-defined.
+      const float slope = std::sqrt(l.depth_dx[i] * l.depth_dx[i] + l.depth_dy[i] * l.depth_dy[i]) / z;
+      if (!(slope <= static_cast<float>(c.max_depth_slope))) continue;
+      bool hole = false;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) hole = hole || !(l.depth[i + dy * l.width + dx] > 0);
+      }
+      if (hole) continue;
       const float noise = static_cast<float>(c.depth_noise) * z * z;
       const float gi = l.intensity_dx[i] * l.intensity_dx[i] + l.intensity_dy[i] * l.intensity_dy[i];
       const float gz = (l.depth_dx[i] * l.depth_dx[i] + l.depth_dy[i] * l.depth_dy[i]) / (noise * noise);
