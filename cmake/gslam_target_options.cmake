@@ -23,6 +23,10 @@ function(gslam_target_options target)
   # Lets `#pragma omp simd` loops call the vectorised libm (libmvec) without OpenMP threads.
   # -fno-trapping-math lets GCC if-convert float selects (we never read FP exception flags).
   target_compile_options(${target} PRIVATE -fopenmp-simd -fno-math-errno -fno-trapping-math)
+  if(GSLAM_BUILD_FUZZERS)
+    # Coverage for libFuzzer in every library the fuzz targets reach.
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
   if(GSLAM_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=${GSLAM_SANITIZE} -fno-omit-frame-pointer
                                              -fno-sanitize-recover=all)

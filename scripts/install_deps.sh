@@ -7,6 +7,7 @@ packages=(
   libcli11-dev libgtest-dev libbenchmark-dev libstb-dev libopencv-dev
   libvulkan-dev glslang-tools mesa-vulkan-drivers
   libglfw3-dev libgl-dev libgl1-mesa-dri xvfb xauth
+  clang libclang-rt-14-dev
 )
 missing=()
 for p in "${packages[@]}"; do

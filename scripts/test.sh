@@ -14,3 +14,13 @@ else
   scripts/build.sh
 fi
 ctest --test-dir "${GSLAM_BUILD_DIR:-build}" --output-on-failure --timeout "$timeout_s" -j "$(nproc)"
+if [ "${1:-}" = "--sanitize" ]; then exit 0; fi
+
+# Hostile input: every reader's libFuzzer target (clang, ASan + UBSan), then the fast suites in
+# that same sanitized build (the SLAM system tests and the command-line runs take minutes there:
+# --sanitize runs them).
+scripts/fuzz.sh "${GSLAM_FUZZ_SECONDS:-20}"
+fuzz_build=${GSLAM_FUZZ_BUILD_DIR:-build-fuzz}
+cmake --build "$fuzz_build" --target splat_tests tracking_tests mapping_tests app_tests
+ctest --test-dir "$fuzz_build" --output-on-failure --timeout 600 -j "$(nproc)" \
+  -L 'splat_tests|tracking_tests|mapping_tests|app_tests' -E 'Cli|Live|Vulkan|HardMotion|Teddy|Real'

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer target of every reader with clang under AddressSanitizer + UBSan into
+# build-fuzz/ and runs each for SECONDS (default 30), seeded from ../shared/data where present
+# and from inputs the project makes itself. Each input must be answered within 10 s and 1 GiB.
+# Prints a table of executions per target; a crash or sanitizer report fails the script and
+# leaves the reproducer in build-fuzz/findings/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-30}
+build=${GSLAM_FUZZ_BUILD_DIR:-build-fuzz}
+data=../shared/data
+mkdir -p "$build"
+CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGSLAM_BUILD_FUZZERS=ON \
+  -DGSLAM_SANITIZE=address,undefined -DGSLAM_ENABLE_VULKAN=OFF -DGSLAM_BUILD_TESTS=ON \
+  -DGSLAM_BUILD_BENCHMARKS=OFF > "$build/configure.log"
+targets=(ply gltf image trajectory dataset config safetensors)
+cmake --build "$build" --target "${targets[@]/#/fuzz_}"
+
+seed() {  # seed TARGET FILE [PREFIX_BYTE]: copies FILE (its first 64 KiB) into the corpus
+  local dir="$build/corpus/$1"; mkdir -p "$dir"
+  [ -f "$2" ] || return 0
+  local name; name=$(basename "$2")
+  if [ -n "${3:-}" ]; then { printf '%b' "$3"; head -c 65536 "$2"; } > "$dir/$name"; else head -c 65536 "$2" > "$dir/$name"; fi
+}
+teddy=$data/tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy
+kitchen=$data/sevenscenes_redkitchen_first200
+seed ply assets/demo_map.ply
+seed ply "$data/supersplat_fruit_drops_3dgs_ply/fruit_drops_minimal.ply"
+seed gltf "$data/khr_gaussian_splatting_fixtures_bevy/khr_conformance_matrix.glb" '\x00'
+seed gltf "$data/khr_gaussian_splatting_fixtures_bevy/khr_conformance_matrix.gltf" '\x01'
+seed gltf "$data/khr_gaussian_splatting_fixtures_bevy/khr_extensible_fallback.gltf" '\x01'
+seed image "$(ls "$kitchen"/depth/*.png 2>/dev/null | head -1)"
+seed image "$(ls "$teddy"/rgb/*.png 2>/dev/null | head -1)"
+seed trajectory "$teddy/groundtruth.txt"
+seed dataset "$teddy/rgb.txt" '\x00'
+seed dataset "$kitchen/rgb.txt" '\x00'
+seed safetensors "$data/gsplat_reference_render_brush/tiny_case.safetensors"
+# Inputs the project makes itself: a map and a trajectory it writes, its configuration.
+mkdir -p "$build/made"
+printf '1000.0 0 0 0 0 0 0 1\n1000.1 0.01 0 0 0 0 0.0499792 0.99875\n' > "$build/made/trajectory.txt"
+seed trajectory "$build/made/trajectory.txt"
+printf '0 traj line\n1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n' > "$build/made/traj.txt"
+seed dataset "$build/made/traj.txt" '\x01'
+printf '{"keyframe_every": 4, "odometry": {"iterations": [3, 3]}, "mapping": {"window": 2}}' > "$build/made/config.json"
+seed config "$build/made/config.json"
+
+mkdir -p "$build/findings"
+echo "| target | seconds | executions | executions/s | result |"
+echo "|---|---|---|---|---|"
+status=0
+for t in "${targets[@]}"; do
+  log="$build/fuzz_$t.log"
+  if "$build/tests/fuzz/fuzz_$t" "$build/corpus/$t" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
+       -rss_limit_mb=1024 -artifact_prefix="$build/findings/$t-" -print_final_stats=1 > "$log" 2>&1; then
+    result=clean
+  else
+    result="FAILED (see $log)"; status=1
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  echo "| $t | $seconds | $runs | $((runs / seconds)) | $result |"
+done
+exit $status
