@@ -12,7 +12,7 @@ echo "| sequence | frames | dropped | latency p50 / p95 ms | keyframes mapped / 
 echo "|---|---|---|---|---|---|---|"
 for seq in tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy sevenscenes_redkitchen_first200; do
   if [ ! -d "$data/$seq" ]; then echo "| $seq | skipped: not in $data | | | | | |"; continue; fi
-  "$gslam" live "$data/$seq" --out "$out/run" --headless "$@" > "$out/log" 2>&1 || { cat "$out/log"; exit 1; }
+  "$gslam" live "$data/$seq" --out "$out/run" --overwrite --headless "$@" > "$out/log" 2>&1 || { cat "$out/log"; exit 1; }
   python3 - "$out/run/summary.json" "$seq" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); live = s["live"]
