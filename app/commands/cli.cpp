@@ -69,7 +69,7 @@ int run_cli(int argc, char** argv) {
   EvalOptions eval;
   CLI::App* eval_cmd = cli.add_subcommand("eval", "Trajectory and rendering errors of a reconstruct run");
   eval_cmd->add_option("run", eval.run, "Output directory of gslam reconstruct")->required();
-  eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth)")->required();
+  eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth; default: the one its summary.json names)");
   eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   eval_cmd->add_flag("--sim3", eval.sim3, "Align with scale (similarity) instead of rigidly");

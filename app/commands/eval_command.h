@@ -8,7 +8,7 @@ namespace app {
 
 struct EvalOptions {
   std::filesystem::path run;      // a gslam reconstruct output directory
-  std::filesystem::path dataset;  // the sequence it was run on
+  std::filesystem::path dataset;  // the sequence it was run on; empty: the one summary.json names
   DatasetOptions dataset_options;
   bool sim3 = false;              // align with scale
   int every = 1;                  // render quality on every N-th frame

@@ -40,6 +40,14 @@ int run_reconstruct(const ReconstructOptions& o) {
   SlamSystem slam(*rasterizer, config);
 
   RunOutputs outputs(o.out, input.string(), *rasterizer, o.overwrite);
+  // What the run read, so that eval (or a later reader) uses the same camera and depth units.
+  const splat::Camera& k = dataset.intrinsics;
+  outputs.extra()["input"] = {{"dataset", std::filesystem::absolute(input).string()},
+                              {"format", dataset.format},
+                              {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"width", k.width}, {"height", k.height}}},
+                              {"depth_scale", dataset.depth_scale},
+                              {"max_frames", o.dataset_options.max_frames},
+                              {"config", slam_config_to_json(config)}};
   // Ctrl-C or SIGTERM: stop taking frames (or end the sweep) and write complete outputs.
   const InterruptGuard interrupt;
   Progress progress("reconstruct", dataset.entries.size(), "frames");

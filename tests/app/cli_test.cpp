@@ -272,3 +272,32 @@ TEST(CliReconstruct, RunFolderHoldsOneRun) {
 }
 
 }  // namespace
+
+namespace {
+
+// A run records what it read (summary.json "input": dataset, camera, depth units, frames,
+// configuration), and eval uses it: a run made with --intrinsics evaluates with no flags.
+TEST(CliEval, UsesTheRunsRecordedDatasetAndIntrinsics) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 6;
+  app::write_synthetic_sequence(dir / "seq", o);
+  std::filesystem::remove(dir / "seq" / "intrinsics.txt");  // a camera the reader cannot know
+  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 1, "mapping": {"iterations": 3}})");
+  const std::string run = (dir / "run").string();
+  const RunResult unknown = run_gslam("reconstruct " + (dir / "seq").string() + " --out " + run);
+  ASSERT_NE(unknown.exit_code, 0) << "without intrinsics.txt the camera must be given";
+  const RunResult made = run_gslam("reconstruct " + (dir / "seq").string() + " --out " + run + " --overwrite --intrinsics 260,260,160,120 --max-frames 5 --config " +
+                                   (dir / "quick.json").string());
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  std::ifstream in(dir / "run" / "summary.json");
+  const nlohmann::json input = nlohmann::json::parse(in).at("input");
+  EXPECT_EQ(input.at("intrinsics").at("fx").get<double>(), 260);
+  EXPECT_EQ(input.at("max_frames").get<int>(), 5);
+  EXPECT_EQ(input.at("config").at("refine_passes").get<int>(), 1);
+  const RunResult eval = run_gslam("eval " + run);
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("ATE RMSE"), std::string::npos) << eval.output;
+}
+
+}  // namespace
