@@ -84,7 +84,7 @@ int run_render(const RenderOptions& o) {
     if (formats.png) write_png_rgb(o.out / (std::string(name) + ".png"), frame.width, frame.height, frame.rgb);
     if (formats.exr) {
       write_render_exr(o.out / (std::string(name) + ".exr"), frame.width, frame.height, frame.rgb, frame.alpha,
-                       frame.depth_normalized);
+                       frame.depth_normalized, settings.background);
     }
     progress.update(i + 1);
   }

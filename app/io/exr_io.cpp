@@ -4,18 +4,35 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "splat/error.h"
 
 namespace app {
 
+float srgb_to_linear(float v) {
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
 void write_render_exr(const std::filesystem::path& path, int width, int height,
-                      std::span<const float> rgb, std::span<const float> alpha,
-                      std::span<const float> depth) {
+                      std::span<const float> display_rgb, std::span<const float> alpha,
+                      std::span<const float> depth, const std::array<float, 3>& background) {
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  if (width < 1 || height < 1 || rgb.size() != pixels * 3 || alpha.size() != pixels || depth.size() != pixels) {
+  if (width < 1 || height < 1 || display_rgb.size() != pixels * 3 || alpha.size() != pixels || depth.size() != pixels) {
     throw splat::Error(path.string() + ": EXR planes do not match " + std::to_string(width) + "x" + std::to_string(height));
+  }
+  // Premultiplied linear: the background taken off, the covered colour linearized, times alpha.
+  std::vector<float> rgb(pixels * 3, 0.f);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const float a = alpha[p];
+    if (!(a > 0)) continue;
+    for (int c = 0; c < 3; ++c) {
+      const float covered = (display_rgb[p * 3 + c] - (1 - a) * background[static_cast<std::size_t>(c)]) / a;
+      rgb[p * 3 + c] = srgb_to_linear(std::max(covered, 0.f)) * a;
+    }
   }
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     try {

@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <filesystem>
 #include <map>
 #include <span>
@@ -33,11 +34,17 @@ splat::Image8 read_rgb8(const std::filesystem::path& path);
 // Reads a single-channel 16-bit PNG (depth maps) exactly as stored.
 splat::Image16 read_png_gray16(const std::filesystem::path& path);
 
-// A rendering in one EXR file: R, G, B, A and Z (depth in metres, 0 where nothing was hit),
-// all 32-bit float. Atomic.
+// A rendering in one EXR file as compositing tools expect it: R, G, B linear light (the sRGB
+// transfer removed) premultiplied by A, and Z (depth in metres, 0 where nothing was hit), all
+// 32-bit float. `rgb` is the render as displayed, composited over `background`; it is taken off
+// again, and the colour under each pixel's alpha linearized (exact where one surface covers the
+// pixel, an approximation along edges). Atomic.
 void write_render_exr(const std::filesystem::path& path, int width, int height,
                       std::span<const float> rgb, std::span<const float> alpha,
-                      std::span<const float> depth);
+                      std::span<const float> depth, const std::array<float, 3>& background = {0, 0, 0});
+
+// The sRGB transfer undone: display value to linear light (values above 1 follow the same curve).
+float srgb_to_linear(float v);
 
 struct ExrImage {
   int width = 0, height = 0;

@@ -301,3 +301,42 @@ TEST(CliEval, UsesTheRunsRecordedDatasetAndIntrinsics) {
 }
 
 }  // namespace
+
+namespace {
+
+// EXR renders hold linear light premultiplied by alpha, PNG the display values composited over
+// the background: EXR = srgb_to_linear((PNG - (1 - A) background) / A) A, to the PNG's 8-bit
+// steps; nothing where A is 0.
+TEST(CliRender, ExrIsLinearPremultipliedAgainstThePng) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  const RunResult r = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "out").string() +
+                                " --orbit 1 --size 80x60 --format png,exr --backend cpu --background 0.2,0.4,0.6");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const splat::Image8 png = app::read_png_rgb8(dir / "out" / "view_0000.png");
+  const app::ExrImage exr = app::read_exr(dir / "out" / "view_0000.exr");
+  const auto& a = exr.channels.at("A");
+  std::size_t covered = 0, empty = 0;
+  for (std::size_t p = 0; p < a.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const float linear = exr.channels.at(std::string(1, "RGB"[c]))[p];
+      if (a[p] > 0.3f) {
+        // The covered colour: the PNG's display value with the background taken off.
+        const float bg = 0.2f * static_cast<float>(c + 1);
+        const float display = png.data[p * 3 + c] / 255.f;
+        const float x = (display - (1 - a[p]) * bg) / a[p], h = 0.5f / 255 / a[p];  // half an 8-bit step
+        if (x - h < 0 || x + h > 1) continue;  // clamped in the PNG: no exact counterpart
+        const float step = a[p] * (app::srgb_to_linear(x + h) - app::srgb_to_linear(x - h));
+        EXPECT_NEAR(linear, app::srgb_to_linear(x) * a[p], step + 1e-6f) << "pixel " << p << " channel " << c;
+        covered += c == 0;
+      } else if (a[p] == 0.f) {
+        EXPECT_EQ(linear, 0.f) << "no surface, no light (premultiplied), pixel " << p;
+        empty += c == 0;
+      }
+    }
+  }
+  EXPECT_GT(covered, 50u);
+  EXPECT_GT(empty, 50u);
+}
+
+}  // namespace

@@ -1,5 +1,7 @@
 #include <cmath>
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "io/image_io.h"
@@ -23,9 +25,15 @@ TEST(ImageFormats, ExrKeepsEveryChannelExactly) {
   const app::ExrImage img = app::read_exr(dir / "r.exr");
   ASSERT_EQ(img.width, w);
   ASSERT_EQ(img.height, h);
+  // Colour is stored linear and premultiplied: the display value over alpha, linearized, times
+  // alpha (nothing where alpha is 0).
   for (int c = 0; c < 3; ++c) {
     const auto& plane = img.channels.at(std::string(1, "RGB"[c]));
-    for (int p = 0; p < w * h; ++p) ASSERT_EQ(plane[p], rgb[p * 3 + c]) << "channel " << c << " pixel " << p;
+    for (int p = 0; p < w * h; ++p) {
+      const float a = alpha[p];
+      const float expected = a > 0 ? app::srgb_to_linear(std::max(rgb[p * 3 + c] / a, 0.f)) * a : 0.f;
+      ASSERT_EQ(plane[p], expected) << "channel " << c << " pixel " << p;
+    }
   }
   EXPECT_EQ(img.channels.at("A"), alpha);
   EXPECT_EQ(img.channels.at("Z"), depth);
