@@ -238,14 +238,20 @@ TEST(CliReconstruct, CtrlCWritesCompleteOutputs) {
 
 namespace {
 
-// A run folder holds one run: a second run refuses it unless --overwrite, which clears the first
-// run's files (and a killed run's temporaries); eval refuses a folder whose files mix runs.
-TEST(CliReconstruct, RunFolderHoldsOneRun) {
-  TempDir dir;
+// DIR/seq, a 6-frame synthetic sequence, and DIR/quick.json, a configuration that reconstructs
+// it in about a second.
+void write_quick_run_inputs(const TempDir& dir) {
   app::SyntheticOptions o;
   o.frames = 6;
   app::write_synthetic_sequence(dir / "seq", o);
   gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 1, "mapping": {"iterations": 3}})");
+}
+
+// A run folder holds one run: a second run refuses it unless --overwrite, which clears the first
+// run's files (and a killed run's temporaries); eval refuses a folder whose files mix runs.
+TEST(CliReconstruct, RunFolderHoldsOneRun) {
+  TempDir dir;
+  write_quick_run_inputs(dir);
   const std::string args = "reconstruct " + (dir / "seq").string() + " --config " + (dir / "quick.json").string();
   ASSERT_EQ(run_gslam(args + " --out " + (dir / "a").string()).exit_code, 0);
   ASSERT_EQ(run_gslam(args + " --out " + (dir / "b").string() + " --max-frames 4").exit_code, 0);
@@ -279,11 +285,8 @@ namespace {
 // configuration), and eval uses it: a run made with --intrinsics evaluates with no flags.
 TEST(CliEval, UsesTheRunsRecordedDatasetAndIntrinsics) {
   TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 6;
-  app::write_synthetic_sequence(dir / "seq", o);
+  write_quick_run_inputs(dir);
   std::filesystem::remove(dir / "seq" / "intrinsics.txt");  // a camera the reader cannot know
-  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 1, "mapping": {"iterations": 3}})");
   const std::string run = (dir / "run").string();
   const RunResult unknown = run_gslam("reconstruct " + (dir / "seq").string() + " --out " + run);
   ASSERT_NE(unknown.exit_code, 0) << "without intrinsics.txt the camera must be given";
