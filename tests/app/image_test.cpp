@@ -1,4 +1,6 @@
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include <algorithm>
 
@@ -60,6 +62,31 @@ TEST(ImageFormats, SixteenBitPngRoundTrips) {
   GSLAM_EXPECT_ERROR(app::read_png_rgb8(dir / "bad.png"), "bad.png");
   app::write_png_rgb(dir / "rgb.png", 2, 1, std::vector<float>(6, 0.5f));
   GSLAM_EXPECT_ERROR(app::read_png_gray16(dir / "rgb.png"), "rgb.png", "16-bit greyscale");
+}
+
+// A PNG whose header claims 100000x100000 pixels (40 GB as RGB) in a few bytes: refused from
+// the header, before the pixels are allocated.
+TEST(ImageFormats, PngHeaderClaimingGigapixelsIsRefusedBeforeAllocating) {
+  TempDir dir;
+  auto be32 = [](uint32_t v) {
+    return std::string{char(v >> 24), char((v >> 16) & 255), char((v >> 8) & 255), char(v & 255)};
+  };
+  // CRC-32 as PNG chunks use it (libpng checks it before reading the header's fields).
+  auto crc = [](const std::string& bytes) {
+    uint32_t c = 0xffffffffu;
+    for (unsigned char b : bytes) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xffffffffu;
+  };
+  auto chunk = [&](const std::string& type, const std::string& data) {
+    return be32(static_cast<uint32_t>(data.size())) + type + data + be32(crc(type + data));
+  };
+  const std::string ihdr = be32(100000) + be32(100000) + std::string{8, 2, 0, 0, 0};  // 8-bit RGB
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) + chunk("IEND", "");
+  gslam::test::write_text(dir / "huge.png", png);
+  GSLAM_EXPECT_ERROR(app::read_png_rgb8(dir / "huge.png"), "huge.png", "100000x100000", "at most 16384 a side");
 }
 
 }  // namespace
