@@ -73,10 +73,13 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
   const Eigen::Isometry3d guess = predict(frame.timestamp);
   const Reference& newest = references_.front();
   if (align(newest, keyframe_pose(newest.keyframe), guess, record)) return;
-  // Lost: from the last pose (no motion), then against the older references.
+  // Lost: from the last pose (no motion; unless that was the guess), then against the older
+  // references.
   FrameRecord first_try = record;
   record.retried = true;
-  if (align(newest, keyframe_pose(newest.keyframe), last_poses_.back(), record)) return;
+  const Eigen::Matrix4d& g = guess.matrix();
+  const bool guess_was_last = std::equal(g.data(), g.data() + 16, last_poses_.back().matrix().data());
+  if (!guess_was_last && align(newest, keyframe_pose(newest.keyframe), last_poses_.back(), record)) return;
   for (std::size_t k = 1; k < references_.size(); ++k) {
     if (align(references_[k], keyframe_pose(references_[k].keyframe), last_poses_.back(), record)) return;
   }

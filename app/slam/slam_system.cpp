@@ -115,10 +115,11 @@ double measured_fraction(const splat::RgbdFrame& frame) {
 FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   rethrow_mapping_error();
   FrameRecord record;
-  if (!tracker_.started() && measured_fraction(frame) < kMinSeedDepthFraction) {
+  const double measured = tracker_.started() ? 1.0 : measured_fraction(frame);
+  if (measured < kMinSeedDepthFraction) {
     record.timestamp = frame.timestamp;
     record.tracked = false;
-    record.reason = "waiting for a first frame with depth: " + std::to_string(100 * measured_fraction(frame)) +
+    record.reason = "waiting for a first frame with depth: " + std::to_string(100 * measured) +
                     "% of its pixels are measured";
     std::lock_guard lock(mutex_);
     frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false});
