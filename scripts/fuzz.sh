@@ -13,7 +13,7 @@ mkdir -p "$build"
 CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGSLAM_BUILD_FUZZERS=ON \
   -DGSLAM_SANITIZE=address,undefined -DGSLAM_ENABLE_VULKAN=OFF -DGSLAM_BUILD_TESTS=ON \
   -DGSLAM_BUILD_BENCHMARKS=OFF > "$build/configure.log"
-targets=(ply gltf image trajectory dataset config safetensors)
+targets=(ply gltf image trajectory dataset config safetensors checkpoint)
 cmake --build "$build" --target "${targets[@]/#/fuzz_}"
 
 seed() {  # seed TARGET FILE [PREFIX_BYTE]: copies FILE (its first 64 KiB) into the corpus
@@ -43,6 +43,16 @@ printf '0 traj line\n1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n' > "$build/made/traj.txt"
 seed dataset "$build/made/traj.txt" '\x01'
 printf '{"keyframe_every": 4, "odometry": {"iterations": [3, 3]}, "mapping": {"window": 2}}' > "$build/made/config.json"
 seed config "$build/made/config.json"
+# A checkpoint of an empty run: magic, header length (8 bytes, little-endian), header, 16 empty arrays.
+header='{"run":{},"tracker":{"last_poses":[],"last_times":[],"last_keyframe":[1,0,0,0,0,1,0,0,0,0,1,0],'\
+'"since_keyframe":0,"references":[]},"mapper":{"sh_degree":0,"keyframes":[],"vignetting":[0,0],'\
+'"vignetting_m":[0,0],"vignetting_v":[0,0],"vignetting_steps":0,"added":0,"rng":"1"},"mapper_keyframes":[],'\
+'"keyframe_world":[],"frames":[],"totals":{"keyframes_mapped":0,"keyframes_skipped":0,"gaussians_added":0,'\
+'"gaussians_pruned":0,"iterations":0,"last_loss":0,"mapping_ms":0}}'
+length=${#header}
+{ printf 'gslam checkpoint 1\n'; printf "\\x$(printf %02x $((length & 255)))\\x$(printf %02x $((length >> 8)))"
+  head -c 6 /dev/zero; printf '%s' "$header"; head -c 128 /dev/zero; } > "$build/made/checkpoint.bin"
+seed checkpoint "$build/made/checkpoint.bin"
 
 mkdir -p "$build/findings"
 echo "| target | seconds | executions | executions/s | result |"

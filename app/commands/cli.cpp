@@ -59,6 +59,7 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("dataset", recon.dataset, "TUM RGB-D folder (default: the bundled synthetic sequence)");
   recon_cmd->add_option("--out", recon.out, "Output directory (required unless --print-config)");
   recon_cmd->add_flag("--overwrite", recon.overwrite, "Replace the outputs of another run in --out");
+  recon_cmd->add_flag("--resume", recon.resume, "Continue the interrupted run in --out from its checkpoint");
   recon_cmd->add_flag("--print-config", recon.print_config, "Write the effective SLAM configuration (defaults and --config) as JSON and stop");
   recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");

@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.h"
 #include "commands/evaluation.h"
+#include "commands/run_input.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
 #include "io/plot.h"
@@ -38,33 +39,6 @@ mapping::Vignetting run_vignetting(const std::filesystem::path& run) {
   return v;
 }
 
-// What a run recorded of its input (summary.json "input"); empty fields where it did not.
-struct RecordedInput {
-  std::filesystem::path dataset;
-  std::string intrinsics;  // "fx,fy,cx,cy" as --intrinsics takes it
-  double depth_scale = 0;
-  int max_frames = 0;
-};
-
-RecordedInput recorded_input(const std::filesystem::path& run, const nlohmann::json& summary) {
-  RecordedInput r;
-  if (!summary.contains("input")) return r;  // runs of `live`, or of earlier versions
-  try {
-    const nlohmann::json& in = summary.at("input");
-    r.dataset = in.at("dataset").get<std::string>();
-    const nlohmann::json& k = in.at("intrinsics");
-    char text[160];
-    std::snprintf(text, sizeof(text), "%.17g,%.17g,%.17g,%.17g", k.at("fx").get<double>(), k.at("fy").get<double>(),
-                  k.at("cx").get<double>(), k.at("cy").get<double>());
-    r.intrinsics = text;
-    r.depth_scale = in.at("depth_scale").get<double>();
-    r.max_frames = in.value("max_frames", 0);
-  } catch (const nlohmann::json::exception& e) {
-    throw splat::Error((run / "summary.json").string() + ": \"input\" is malformed: " + e.what());
-  }
-  return r;
-}
-
 }  // namespace
 
 int run_eval(const EvalOptions& o) {
@@ -77,15 +51,16 @@ int run_eval(const EvalOptions& o) {
     const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
     if (summary.is_discarded()) throw splat::Error((o.run / "summary.json").string() + ": not valid JSON");
     check_run_manifest(o.run, summary);
-    recorded = recorded_input(o.run, summary);
+    // Runs of `live`, or of earlier versions, recorded no input.
+    if (summary.contains("input")) recorded = recorded_input(summary["input"], (o.run / "summary.json").string());
   }
   // The run's own dataset, camera and depth units unless the command line says otherwise.
   const std::filesystem::path dataset_path = o.dataset.empty() ? recorded.dataset : o.dataset;
   if (dataset_path.empty()) throw splat::Error((o.run / "summary.json").string() + ": names no dataset; give --dataset");
   DatasetOptions options = o.dataset_options;
-  if (options.intrinsics.empty()) options.intrinsics = recorded.intrinsics;
-  if (!(options.depth_scale > 0)) options.depth_scale = recorded.depth_scale;
-  if (options.max_frames == 0) options.max_frames = recorded.max_frames;
+  if (options.intrinsics.empty()) options.intrinsics = recorded.options.intrinsics;
+  if (!(options.depth_scale > 0)) options.depth_scale = recorded.options.depth_scale;
+  if (options.max_frames == 0) options.max_frames = recorded.options.max_frames;
   const Dataset dataset = open_dataset(dataset_path, options);
   if (!dataset.has_ground_truth()) throw splat::Error(dataset_path.string() + ": the dataset has no ground truth");
   const std::vector<StampedPose> estimate = read_tum_trajectory(o.run / "trajectory.txt");

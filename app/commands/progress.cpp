@@ -29,7 +29,8 @@ void Progress::update(std::size_t done, const std::string& extra) {
   last_print_ = now;
   printed_ = true;
   const double elapsed = elapsed_seconds();
-  const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
+  const std::size_t done_here = done - std::min(done, resumed_at_);
+  const double rate = elapsed > 0 ? static_cast<double>(done_here) / elapsed : 0;
   const double eta = rate > 0 ? static_cast<double>(total_ - std::min(done, total_)) / rate : 0;
   char count[64], eta_text[32] = "";
   if (open_ended) {

@@ -11,6 +11,8 @@ namespace app {
 class Progress {
  public:
   Progress(std::string label, std::size_t total, std::string unit, std::FILE* out = stderr);
+  // A job resumed with `done` items already complete: rates and ETA count from there.
+  void resume_at(std::size_t done) { resumed_at_ = done; }
   // Reports `done` items complete, with an optional suffix (for example "45,624 Gaussians").
   void update(std::size_t done, const std::string& extra = "");
   // Ends the progress line.
@@ -19,7 +21,7 @@ class Progress {
 
  private:
   std::string label_, unit_;
-  std::size_t total_;
+  std::size_t total_, resumed_at_ = 0;
   std::FILE* out_;
   bool tty_;
   std::chrono::steady_clock::time_point start_, last_print_;

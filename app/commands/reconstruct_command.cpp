@@ -2,31 +2,76 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
+#include <optional>
 
 #include "commands/interrupt.h"
 #include "commands/progress.h"
+#include "commands/run_input.h"
 #include "commands/run_outputs.h"
+#include "io/run_checkpoint.h"
+#include "io/run_folder.h"
 #include "io/slam_config_io.h"
 #include "slam/slam_system.h"
 #include "datasets/synthetic_sequence.h"
 #include "splat/error.h"
 
 namespace app {
+namespace {
+constexpr char kCheckpointFile[] = "checkpoint.bin";
+
+// What a run reads: its dataset, dataset options and SLAM configuration; with --resume, the
+// interrupted run's, from its checkpoint.
+struct RunPlan {
+  std::filesystem::path input;
+  DatasetOptions dataset_options;
+  SlamConfig config;
+  std::optional<RunCheckpoint> checkpoint;
+};
+
+RunPlan plan_resume(const ReconstructOptions& o) {
+  if (!o.dataset.empty() || !o.config.empty() || !o.dataset_options.intrinsics.empty() ||
+      o.dataset_options.depth_scale > 0 || o.dataset_options.max_frames > 0 || o.overwrite) {
+    throw splat::Error("reconstruct --resume continues with the interrupted run's dataset and configuration: "
+                       "give only --out (and backend options)");
+  }
+  const std::filesystem::path file = o.out / kCheckpointFile;
+  if (!std::filesystem::exists(file)) {
+    throw splat::Error(file.string() + ": no checkpoint to resume (the run completed, or stopped before its first checkpoint)");
+  }
+  RunPlan plan;
+  plan.checkpoint = read_run_checkpoint(file);
+  const nlohmann::json& run = plan.checkpoint->run;
+  if (!run.contains("extra") || !run["extra"].contains("input")) throw splat::Error(file.string() + ": records no input");
+  const RecordedInput recorded = recorded_input(run["extra"]["input"], file.string());
+  plan.input = recorded.dataset;
+  plan.dataset_options = recorded.options;
+  plan.config = slam_config_from_json(recorded.config);
+  return plan;
+}
+
+RunPlan plan_new_run(const ReconstructOptions& o) {
+  RunPlan plan{o.dataset, o.dataset_options, load_slam_config(o.config), std::nullopt};  // first: a bad file costs nothing
+  if (plan.input.empty() && !o.out.empty()) {
+    plan.input = o.out / "synthetic_input";
+    std::fprintf(stderr, "no dataset given: generating the bundled synthetic sequence into %s\n", plan.input.c_str());
+    write_synthetic_sequence(plan.input, SyntheticOptions{});
+  }
+  return plan;
+}
+
+}  // namespace
+
 int run_reconstruct(const ReconstructOptions& o) {
-  const SlamConfig config = load_slam_config(o.config);  // first: a bad file costs nothing
   if (o.print_config) {
-    std::printf("%s\n", slam_config_to_json(config).dump(2).c_str());
+    std::printf("%s\n", slam_config_to_json(load_slam_config(o.config)).dump(2).c_str());
     return 0;
   }
   if (o.out.empty()) throw splat::Error("reconstruct: --out is required");
-  std::filesystem::create_directories(o.out);
-  std::filesystem::path input = o.dataset;
-  if (input.empty()) {
-    input = o.out / "synthetic_input";
-    std::fprintf(stderr, "no dataset given: generating the bundled synthetic sequence into %s\n", input.c_str());
-    write_synthetic_sequence(input, SyntheticOptions{});
-  }
-  const Dataset dataset = open_dataset(input, o.dataset_options);
+  RunPlan plan = o.resume ? plan_resume(o) : plan_new_run(o);
+  const SlamConfig& config = plan.config;
+  const std::filesystem::path& input = plan.input;
+  const Dataset dataset = open_dataset(input, plan.dataset_options);
   std::fprintf(stderr, "dataset %s (%s): %zu frames at %dx%d%s", input.c_str(), dataset.format.c_str(),
                dataset.entries.size(), dataset.intrinsics.width, dataset.intrinsics.height,
                dataset.has_ground_truth() ? ", with ground truth" : "");
@@ -38,21 +83,37 @@ int run_reconstruct(const ReconstructOptions& o) {
   auto rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
   SlamSystem slam(*rasterizer, config);
-
-  RunOutputs outputs(o.out, input.string(), *rasterizer, o.overwrite);
-  // What the run read, so that eval (or a later reader) uses the same camera and depth units.
-  const splat::Camera& k = dataset.intrinsics;
-  outputs.extra()["input"] = {{"dataset", std::filesystem::absolute(input).string()},
-                              {"format", dataset.format},
-                              {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"width", k.width}, {"height", k.height}}},
-                              {"depth_scale", dataset.depth_scale},
-                              {"max_frames", o.dataset_options.max_frames},
-                              {"config", slam_config_to_json(config)}};
+  const auto load = [&](std::size_t i) { return dataset.load(i); };
+  std::unique_ptr<RunOutputs> outputs_owner;
+  std::size_t first = 0;
+  if (plan.checkpoint) {
+    first = plan.checkpoint->slam.frames.size();
+    if (first > dataset.entries.size()) {
+      throw splat::Error((o.out / kCheckpointFile).string() + ": holds " + std::to_string(first) + " frames, " +
+                         input.string() + " has " + std::to_string(dataset.entries.size()));
+    }
+    remove_stale_temporaries(o.out);
+    outputs_owner = std::make_unique<RunOutputs>(o.out, input.string(), *rasterizer, plan.checkpoint->run);
+    if (outputs_owner->records().size() != first) {
+      throw splat::Error((o.out / kCheckpointFile).string() + ": the run recorded " +
+                         std::to_string(outputs_owner->records().size()) + " frames, the SLAM state " + std::to_string(first));
+    }
+    slam.restore(std::move(plan.checkpoint->slam), load);
+    plan.checkpoint.reset();
+    std::fprintf(stderr, "resuming at frame %zu of %zu\n", first, dataset.entries.size());
+  } else {
+    outputs_owner = std::make_unique<RunOutputs>(o.out, input.string(), *rasterizer, o.overwrite);
+    // What the run read, so that eval and --resume use the same camera, depth units and settings.
+    outputs_owner->extra()["input"] = run_input_json(input, dataset, plan.dataset_options.max_frames, config);
+  }
+  RunOutputs& outputs = *outputs_owner;
+  const auto save_state = [&] { write_run_checkpoint(o.out / kCheckpointFile, {slam.state(), outputs.state()}); };
   // Ctrl-C or SIGTERM: stop taking frames (or end the sweep) and write complete outputs.
   const InterruptGuard interrupt;
   Progress progress("reconstruct", dataset.entries.size(), "frames");
+  progress.resume_at(first);
   const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
-  for (std::size_t i = 0; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
+  for (std::size_t i = first; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
     const auto load_start = std::chrono::steady_clock::now();
     const splat::RgbdFrame frame = dataset.load(i);
     const double loading_ms =
@@ -63,10 +124,15 @@ int run_reconstruct(const ReconstructOptions& o) {
     progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes()) + " keyframes");
     if ((i + 1) % every == 0) {
       outputs.update_poses(slam.trajectory());
-      outputs.checkpoint(*slam.map(), slam.keyframes(), (i + 1) % (5 * every) == 0);
+      const bool with_map = (i + 1) % (5 * every) == 0;
+      outputs.checkpoint(*slam.map(), slam.keyframes(), with_map);
+      if (with_map) save_state();
     }
   }
   progress.finish();
+  // Where a resumed run continues: after the last frame taken (the sweep starts over).
+  outputs.update_poses(slam.trajectory());
+  save_state();
   const std::size_t refine_frames = slam.refine_frames().size();
   if (config.refine_passes > 0 && refine_frames > 0 && !InterruptGuard::interrupted()) {
     const std::size_t visits = refine_frames * static_cast<std::size_t>(config.refine_passes);
@@ -96,10 +162,11 @@ int run_reconstruct(const ReconstructOptions& o) {
   }
   const std::shared_ptr<const splat::Gaussians> map = slam.map();
   outputs.finish(*map, slam.keyframes(), *rasterizer, dataset.intrinsics, truth);
+  if (!InterruptGuard::interrupted()) std::filesystem::remove(o.out / kCheckpointFile);  // nothing to resume
   const std::size_t frames = outputs.records().size();
   std::printf("reconstructed %zu frames (%zu keyframes, %zu tracking failures) into %zu Gaussians at %.2f frames/s -> %s\n",
               frames, slam.keyframes(), outputs.failures(), map->size(),
-              static_cast<double>(frames) / progress.elapsed_seconds(), o.out.c_str());
+              static_cast<double>(frames) / outputs.elapsed_seconds(), o.out.c_str());
   return 0;
 }
 

@@ -15,6 +15,7 @@ struct ReconstructOptions {
   BackendChoice backend;
   bool print_config = false;      // write the effective configuration as JSON and stop
   bool overwrite = false;         // replace another run's outputs in `out`
+  bool resume = false;            // continue the interrupted run in `out` from its checkpoint
   int checkpoint_every = 10;      // frames between atomic trajectory/summary checkpoints;
                                   // map.ply is checkpointed every 5x that
 };
@@ -22,7 +23,8 @@ struct ReconstructOptions {
 // `gslam reconstruct`: runs SLAM over a sequence and writes DIR/trajectory.txt (TUM, one line
 // per frame), DIR/map.ply, DIR/map.glb, DIR/keyframes/kf_NNNN.{png,exr} (the final map seen
 // from each keyframe) and DIR/summary.json. Every file is written atomically and checkpointed
-// while running, so an interrupted run leaves the last complete outputs.
+// while running, so an interrupted run leaves the last complete outputs, and DIR/checkpoint.bin
+// (the SLAM state: removed once the run completes), from which --resume continues it.
 int run_reconstruct(const ReconstructOptions& options);
 
 }  // namespace app

@@ -6,6 +6,7 @@
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
+#include "io/run_checkpoint.h"
 #include "io/run_folder.h"
 #include "splat/error.h"
 #include "splat/rgbd_frame.h"
@@ -40,8 +41,56 @@ RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat
   prepare_run_folder(out_, overwrite);
 }
 
+RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer,
+                       const nlohmann::json& state)
+    : out_(std::move(out)),
+      input_(std::move(input)),
+      rasterizer_(rasterizer),
+      start_(std::chrono::steady_clock::now()) {
+  try {
+    run_id_ = state.at("run_id").get<std::string>();
+    earlier_seconds_ = state.at("seconds").get<double>();
+    tracking_ms_ = state.at("tracking_ms").get<double>();
+    mapping_ms_ = state.at("mapping_ms").get<double>();
+    loading_ms_ = state.at("loading_ms").get<double>();
+    extra_ = state.at("extra");
+    for (const nlohmann::json& f : state.at("frames")) {
+      FrameRecord r;
+      r.timestamp = f.at("timestamp").get<double>();
+      r.T_world_cam = pose_from_json(f.at("T_world_cam"));
+      r.tracked = f.at("tracked").get<bool>();
+      r.retried = f.at("retried").get<bool>();
+      r.reason = f.at("reason").get<std::string>();
+      r.keyframe = f.at("keyframe").get<bool>();
+      r.renders = f.at("renders").get<int>();
+      r.overlap = f.at("overlap").get<double>();
+      r.tracking_ms = f.at("tracking_ms").get<double>();
+      r.mapping_ms = f.at("mapping_ms").get<double>();
+      r.gaussians = f.at("gaussians").get<std::size_t>();
+      failures_ += r.tracked ? 0 : 1;
+      retries_ += r.retried ? 1 : 0;
+      records_.push_back(r);
+      trajectory_.push_back({r.timestamp, r.T_world_cam});
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw splat::Error((out_ / "checkpoint.bin").string() + ": malformed run record: " + e.what());
+  }
+}
+
+nlohmann::json RunOutputs::state() const {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const FrameRecord& r : records_) {
+    frames.push_back({{"timestamp", r.timestamp}, {"T_world_cam", pose_to_json(r.T_world_cam)},
+                      {"tracked", r.tracked}, {"retried", r.retried}, {"reason", r.reason},
+                      {"keyframe", r.keyframe}, {"renders", r.renders}, {"overlap", r.overlap},
+                      {"tracking_ms", r.tracking_ms}, {"mapping_ms", r.mapping_ms}, {"gaussians", r.gaussians}});
+  }
+  return {{"run_id", run_id_}, {"seconds", elapsed_seconds()}, {"tracking_ms", tracking_ms_},
+          {"mapping_ms", mapping_ms_}, {"loading_ms", loading_ms_}, {"extra", extra_}, {"frames", frames}};
+}
+
 double RunOutputs::elapsed_seconds() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  return earlier_seconds_ + std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
 void RunOutputs::add(const FrameRecord& record, double loading_ms) {

@@ -24,6 +24,12 @@ class RunOutputs {
   // `overwrite`, which removes them).
   RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer, bool overwrite);
 
+  // Continues the run whose state() is `state`, in the folder it was interrupted in.
+  RunOutputs(std::filesystem::path out, std::string input, const splat::Rasterizer& rasterizer,
+             const nlohmann::json& state);
+  // What the run has recorded so far (frames, timings, extra fields, its id), for a checkpoint.
+  nlohmann::json state() const;
+
   // Records one processed frame.
   void add(const FrameRecord& record, double loading_ms);
   // Replaces the recorded poses (one per frame added, in order) with later estimates.
@@ -53,6 +59,7 @@ class RunOutputs {
   std::string input_;
   const splat::Rasterizer& rasterizer_;
   std::chrono::steady_clock::time_point start_;
+  double earlier_seconds_ = 0;  // a resumed run: time spent before the interruption
   std::vector<FrameRecord> records_;
   std::vector<StampedPose> trajectory_;
   double tracking_ms_ = 0, mapping_ms_ = 0, loading_ms_ = 0;

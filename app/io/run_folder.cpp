@@ -27,8 +27,8 @@ std::string checksum(const std::filesystem::path& file) {
   return text;
 }
 
-// Temporary files of write_atomically (".name.tmpPID.ext") left by a killed run.
-void remove_stale_temporaries(const std::filesystem::path& dir) {
+// Temporary files of write_atomically: ".name.tmpPID.ext".
+void remove_temporaries_in(const std::filesystem::path& dir) {
   if (!std::filesystem::is_directory(dir)) return;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
@@ -40,10 +40,14 @@ void remove_stale_temporaries(const std::filesystem::path& dir) {
 
 }  // namespace
 
+void remove_stale_temporaries(const std::filesystem::path& dir) {
+  remove_temporaries_in(dir);
+  remove_temporaries_in(dir / "keyframes");
+}
+
 void prepare_run_folder(const std::filesystem::path& dir, bool overwrite) {
   std::filesystem::create_directories(dir);
   remove_stale_temporaries(dir);
-  remove_stale_temporaries(dir / "keyframes");
   std::vector<std::filesystem::path> owned;
   for (const std::string& name : kRunFiles) {
     if (std::filesystem::exists(dir / name)) owned.push_back(dir / name);
@@ -52,7 +56,9 @@ void prepare_run_folder(const std::filesystem::path& dir, bool overwrite) {
   if (owned.empty()) return;
   if (!overwrite) {
     throw splat::Error(dir.string() + ": holds another run's outputs (" + owned.front().filename().string() +
-                       "); give --overwrite to replace them, or another --out");
+                       "); give --overwrite to replace them, " +
+                       (std::filesystem::exists(dir / "checkpoint.bin") ? "--resume to continue that interrupted run, " : "") +
+                       "or another --out");
   }
   for (const auto& path : owned) std::filesystem::remove_all(path);
 }

@@ -11,6 +11,7 @@ namespace app {
 
 // The files a run writes into its folder (relative paths); keyframes/ is owned as a whole.
 inline const std::vector<std::string> kRunFiles = {"trajectory.txt", "map.ply", "map.glb", "summary.json",
+                                                    "checkpoint.bin",
                                                     "eval.json", "trajectory_top.png", "ate_over_time.png",
                                                     "psnr_over_time.png"};
 
@@ -18,6 +19,10 @@ inline const std::vector<std::string> kRunFiles = {"trajectory.txt", "map.ply", 
 // unless `overwrite`, in which case those outputs are removed; temporary files a killed run
 // left are removed either way. Throws splat::Error.
 void prepare_run_folder(const std::filesystem::path& dir, bool overwrite);
+
+// Removes the temporary files of write_atomically that a killed run left in `dir` and its
+// keyframes/ (a resumed run keeps the rest).
+void remove_stale_temporaries(const std::filesystem::path& dir);
 
 // {"run_id": id, "files": {"map.ply": {"bytes": n, "fnv1a64": "..."}, ...}} for the files of
 // `names` that exist in `dir`.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "slam/elapsed.h"
+#include "splat/error.h"
 #include "splat/se3.h"
 #include "tracking/tracker.h"
 
@@ -134,6 +135,33 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   if (config_.front_end != "odometry") return;
   references_.push_front({last_prepared_, number});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
+}
+
+FrameTracker::State FrameTracker::state() const {
+  State s{last_poses_, last_times_, last_keyframe_, since_keyframe_, {}};
+  for (const Reference& r : references_) s.references.push_back(r.keyframe);
+  return s;
+}
+
+void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(std::size_t number)>& keyframe) {
+  const bool odometry = config_.front_end == "odometry";
+  if (s.last_poses.size() > 2 || s.last_times.size() != s.last_poses.size() ||
+      s.references.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1 ||
+      (odometry && s.references.empty() != s.last_poses.empty()) || (!odometry && !s.references.empty())) {
+    throw splat::Error("FrameTracker::restore: " + std::to_string(s.last_poses.size()) + " poses, " +
+                       std::to_string(s.last_times.size()) + " times and " + std::to_string(s.references.size()) +
+                       " references do not fit front end " + config_.front_end);
+  }
+  std::deque<Reference> references;
+  for (std::size_t number : s.references) {
+    references.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(number), config_.odometry), number});
+  }
+  last_poses_ = s.last_poses;
+  last_times_ = s.last_times;
+  last_keyframe_ = s.last_keyframe;
+  since_keyframe_ = s.since_keyframe;
+  references_ = std::move(references);
+  last_prepared_.reset();  // set by the next track() before anything reads it
 }
 
 }  // namespace app

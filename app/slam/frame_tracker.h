@@ -53,6 +53,19 @@ class FrameTracker {
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
 
+  // What tracking carries from one frame to the next, for checkpoints (between frames).
+  struct State {
+    std::vector<Eigen::Isometry3d> last_poses;  // empty: not started
+    std::vector<double> last_times;
+    Eigen::Isometry3d last_keyframe = Eigen::Isometry3d::Identity();
+    int since_keyframe = 0;
+    std::vector<std::size_t> references;  // odometry: reference keyframe numbers, newest first
+  };
+  State state() const;
+  // Continues from `state`: `keyframe(number)` gives that keyframe's frame. Throws splat::Error
+  // on an inconsistent state.
+  void restore(const State& state, const std::function<splat::RgbdFrame(std::size_t number)>& keyframe);
+
  private:
   struct Reference {
     std::shared_ptr<const tracking::OdometryFrame> frame;

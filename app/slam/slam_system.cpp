@@ -175,6 +175,51 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   return record;
 }
 
+SlamSystem::State SlamSystem::state() {
+  wait_for_mapping();
+  std::lock_guard lock(mutex_);
+  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_};
+}
+
+void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
+  auto inconsistent = [](const std::string& what) { throw splat::Error("SlamSystem::restore: " + what); };
+  if (!frames_.empty() || tracker_.started()) inconsistent("the system has already processed frames");
+  // Keyframe number -> frame index, from the frames' own record of which were keyframes.
+  std::vector<std::size_t> keyframe_frame;
+  for (std::size_t i = 0; i < s.frames.size(); ++i) {
+    const FramePose& f = s.frames[i];
+    if (f.is_keyframe) keyframe_frame.push_back(i);
+    if (f.keyframe != kNoKeyframe && f.keyframe >= keyframe_frame.size()) {
+      inconsistent("frame " + std::to_string(i) + " follows keyframe " + std::to_string(f.keyframe) + " of " +
+                   std::to_string(keyframe_frame.size()));
+    }
+  }
+  if (keyframe_frame.size() != s.keyframe_world.size() || s.mapper_keyframes.size() != s.mapper.added) {
+    inconsistent(std::to_string(keyframe_frame.size()) + " keyframes among the frames, " +
+                 std::to_string(s.keyframe_world.size()) + " keyframe poses, " +
+                 std::to_string(s.mapper_keyframes.size()) + " mapped of " + std::to_string(s.mapper.added));
+  }
+  for (std::size_t k : s.mapper_keyframes) {
+    if (k >= keyframe_frame.size()) inconsistent("mapped keyframe " + std::to_string(k) + " does not exist");
+  }
+  if (s.tracker.last_poses.empty() != keyframe_frame.empty()) inconsistent("tracking and keyframes disagree");
+  auto keyframe = [&](std::size_t number) {
+    if (number >= keyframe_frame.size()) inconsistent("keyframe " + std::to_string(number) + " does not exist");
+    return load(keyframe_frame[number]);
+  };
+  tracker_.restore(s.tracker, keyframe);
+  mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
+    if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
+    return keyframe(s.mapper_keyframes[number]);
+  });
+  std::lock_guard lock(mutex_);
+  mapper_keyframes_ = std::move(s.mapper_keyframes);
+  keyframe_world_ = std::move(s.keyframe_world);
+  frames_ = std::move(s.frames);
+  totals_ = s.totals;
+  map_ = std::make_shared<const splat::Gaussians>(mapper_.map());
+}
+
 void SlamSystem::mapping_loop() {
 #ifdef __linux__
   // Mapping yields the processor to tracking, which must keep up with the camera (Linux sets

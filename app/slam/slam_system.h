@@ -86,7 +86,6 @@ class SlamSystem {
                         const std::function<void(std::size_t, std::size_t)>& visited = {},
                         const std::function<bool()>& stop = {});
 
- private:
   // A frame's pose relative to the keyframe it followed (or itself); kNoKeyframe for frames
   // skipped while waiting for a first frame with depth (pose: identity, not tracked).
   static constexpr std::size_t kNoKeyframe = static_cast<std::size_t>(-1);
@@ -95,6 +94,24 @@ class SlamSystem {
     Eigen::Isometry3d T_keyframe_cam;
     bool tracked, is_keyframe;
   };
+  // Everything the system carries from one frame to the next, for checkpoints; the keyframes'
+  // images excepted, which restore() loads again.
+  struct State {
+    FrameTracker::State tracker;
+    mapping::MapperState mapper;
+    std::vector<std::size_t> mapper_keyframes;  // the system's keyframe number per mapper number
+    std::vector<Eigen::Isometry3d> keyframe_world;  // T_world_cam per keyframe number
+    std::vector<FramePose> frames;              // one per frame processed
+    MappingTotals totals;
+  };
+  // The state between two frames (threaded: once mapping is idle).
+  State state();
+  // Continues from `state` on a system that has processed no frame yet, as if it had processed
+  // those frames: `load(i)` gives frame i as process() was given it. Throws splat::Error on a
+  // state that does not hold together.
+  void restore(State state, const std::function<splat::RgbdFrame(std::size_t)>& load);
+
+ private:
   struct KeyframeJob {
     splat::RgbdFrame frame;
     Eigen::Isometry3d T_world_cam;

@@ -45,6 +45,20 @@ void GaussianAdam::remove(std::span<const uint8_t> keep) {
   steps_.resize(out);
 }
 
+void GaussianAdam::restore(State state) {
+  splat::validate_sizes<float>(state.m, "GaussianAdam first moment");
+  splat::validate_sizes<float>(state.v, "GaussianAdam second moment");
+  if (state.m.size() != state.steps.size() || state.v.size() != state.steps.size() ||
+      state.m.sh_degree != state.v.sh_degree) {
+    throw splat::Error("GaussianAdam::restore: moments for " + std::to_string(state.m.size()) + " and " +
+                       std::to_string(state.v.size()) + " Gaussians, step counts for " +
+                       std::to_string(state.steps.size()));
+  }
+  m_ = std::move(state.m);
+  v_ = std::move(state.v);
+  steps_ = std::move(state.steps);
+}
+
 void GaussianAdam::ensure_layout(const splat::Gaussians& map) {
   if (steps_.empty() && m_.empty()) {
     append(map.size(), map.sh_degree);  // first step: state for the whole map

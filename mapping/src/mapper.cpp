@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "mapping/depth_holes.h"
 #include "splat/adam.h"
@@ -126,7 +127,8 @@ void Mapper::step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const spl
 void Mapper::step_vignetting(const std::array<double, 2>& gradient) {
   double k[2] = {vignetting_.k1, vignetting_.k2};
   const double rates[2] = {config_.refine_vignetting_rate, config_.refine_vignetting_rate};
-  adam_step(2, k, gradient.data(), rates, vignetting_adam_.m, vignetting_adam_.v, vignetting_adam_.steps);
+  adam_step(2, k, gradient.data(), rates, vignetting_adam_.m.data(), vignetting_adam_.v.data(),
+            vignetting_adam_.steps);
   vignetting_.k1 = k[0];
   vignetting_.k2 = k[1];
 }
@@ -217,6 +219,54 @@ std::vector<std::pair<std::size_t, Eigen::Isometry3d>> Mapper::keyframe_poses() 
   std::vector<std::pair<std::size_t, Eigen::Isometry3d>> poses;
   for (const Keyframe& kf : keyframes_) poses.emplace_back(kf.number, kf.T_cam_world);
   return poses;
+}
+
+MapperState Mapper::state() const {
+  MapperState s;
+  s.map = map_;
+  s.adam = adam_.state();
+  for (const Keyframe& kf : keyframes_) s.keyframes.push_back({kf.number, kf.T_cam_world, kf.pose});
+  s.vignetting = vignetting_;
+  s.vignetting_m = vignetting_adam_.m;
+  s.vignetting_v = vignetting_adam_.v;
+  s.vignetting_steps = vignetting_adam_.steps;
+  s.added = added_;
+  std::ostringstream rng;
+  rng << rng_;
+  s.rng = rng.str();
+  return s;
+}
+
+void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::size_t number)>& load) {
+  splat::validate(splat::GaussiansView(s.map), "checkpointed map");
+  if (s.adam.steps.size() != s.map.size() && !(s.adam.steps.empty() && s.adam.m.empty())) {
+    throw splat::Error("Mapper::restore: optimizer state for " + std::to_string(s.adam.steps.size()) +
+                       " Gaussians, map of " + std::to_string(s.map.size()));
+  }
+  if (s.keyframes.size() > config_.max_keyframes || s.keyframes.size() > s.added) {
+    throw splat::Error("Mapper::restore: " + std::to_string(s.keyframes.size()) + " stored keyframes of " +
+                       std::to_string(s.added) + " added (at most " + std::to_string(config_.max_keyframes) + ")");
+  }
+  std::istringstream rng(s.rng);
+  std::mt19937 restored_rng;
+  if (!(rng >> restored_rng)) throw splat::Error("Mapper::restore: unreadable random generator state");
+  std::deque<Keyframe> keyframes;
+  for (const MapperState::Keyframe& kf : s.keyframes) {
+    if (kf.number >= s.added) {
+      throw splat::Error("Mapper::restore: keyframe number " + std::to_string(kf.number) + " of " +
+                         std::to_string(s.added) + " added");
+    }
+    keyframes.push_back({splat::downsample(load(kf.number), config_.resolution_factor), kf.T_cam_world, kf.number, kf.pose});
+  }
+  adam_.restore(std::move(s.adam));
+  map_ = std::move(s.map);
+  keyframes_ = std::move(keyframes);
+  vignetting_ = s.vignetting;
+  vignetting_adam_.m = s.vignetting_m;
+  vignetting_adam_.v = s.vignetting_v;
+  vignetting_adam_.steps = s.vignetting_steps;
+  added_ = s.added;
+  rng_ = restored_rng;
 }
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {

@@ -10,6 +10,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "io/image_io.h"
 #include "io/ply_io.h"
+#include "io/run_folder.h"
 #include "app/run_gslam.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
@@ -232,6 +233,45 @@ TEST(CliReconstruct, CtrlCWritesCompleteOutputs) {
   EXPECT_GT(s.at("gaussians").get<std::size_t>(), 0u);
   EXPECT_TRUE(std::filesystem::exists(dir / "run" / "map.ply"));
   EXPECT_TRUE(std::filesystem::exists(dir / "run" / "map.glb"));
+}
+
+// Ctrl-C, then --resume: the run ends with the trajectory and map of a run never interrupted,
+// wherever the interrupt fell (while taking frames or in the sweep).
+TEST(CliReconstruct, ResumeAfterCtrlCEndsAsTheUninterruptedRun) {
+  if (!gslam::test::program_available("timeout")) GTEST_SKIP() << "coreutils timeout not found";
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 16;
+  app::write_synthetic_sequence(dir / "seq", o);
+  gslam::test::write_text(dir / "slow.json", R"({"refine_passes": 2, "mapping": {"iterations": 60}})");
+  const std::string args = " reconstruct " + (dir / "seq").string() + " --config " + (dir / "slow.json").string();
+  ASSERT_EQ(run_gslam(args + " --out " + (dir / "straight").string()).exit_code, 0);
+  const RunResult stopped = gslam::test::run_command("timeout --preserve-status -s INT 1.5 " + std::string(GSLAM_BINARY) +
+                                                     args + " --out " + (dir / "resumed").string());
+  ASSERT_EQ(stopped.exit_code, 0) << stopped.output;
+  ASSERT_TRUE(std::filesystem::exists(dir / "resumed" / "checkpoint.bin")) << stopped.output;
+  // A plain re-run into the folder names --resume; --resume takes no other input.
+  const RunResult again = run_gslam(args + " --out " + (dir / "resumed").string());
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_NE(again.output.find("--resume"), std::string::npos) << again.output;
+  const RunResult mixed = run_gslam(args + " --out " + (dir / "resumed").string() + " --resume");
+  EXPECT_NE(mixed.exit_code, 0);
+  EXPECT_NE(mixed.output.find("give only --out"), std::string::npos) << mixed.output;
+
+  const RunResult resumed = run_gslam("reconstruct --resume --out " + (dir / "resumed").string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming at frame"), std::string::npos) << resumed.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "resumed" / "checkpoint.bin")) << "a completed run keeps no checkpoint";
+  EXPECT_EQ(gslam::test::read_text(dir / "resumed" / "trajectory.txt"), gslam::test::read_text(dir / "straight" / "trajectory.txt"));
+  EXPECT_EQ(gslam::test::read_text(dir / "resumed" / "map.ply"), gslam::test::read_text(dir / "straight" / "map.ply"));
+  std::ifstream in(dir / "resumed" / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_FALSE(s.at("interrupted").get<bool>());
+  EXPECT_EQ(s.at("frames").get<std::size_t>(), 16u);
+  EXPECT_NO_THROW(app::check_run_manifest(dir / "resumed", s));
+  const RunResult nothing_left = run_gslam("reconstruct --resume --out " + (dir / "resumed").string());
+  EXPECT_NE(nothing_left.exit_code, 0);
+  EXPECT_NE(nothing_left.output.find("no checkpoint to resume"), std::string::npos) << nothing_left.output;
 }
 
 }  // namespace

@@ -20,5 +20,7 @@ class TempDir {
 
 // Writes bytes to a file (for hand-made bad inputs).
 void write_text(const std::filesystem::path& path, const std::string& bytes);
+// A file's bytes (empty if it cannot be read).
+std::string read_text(const std::filesystem::path& path);
 
 }  // namespace gslam::test

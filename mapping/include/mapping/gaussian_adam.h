@@ -36,6 +36,15 @@ class GaussianAdam {
   // Keeps the Gaussians where keep[i] != 0, in order (the caller compacts the map the same way).
   void remove(std::span<const uint8_t> keep);
 
+  // Everything a later step depends on, for checkpoints.
+  struct State {
+    splat::Gaussians m, v;
+    std::vector<uint32_t> steps;
+  };
+  State state() const { return {m_, v_, steps_}; }
+  // Throws splat::Error if the moments and step counts disagree in size.
+  void restore(State state);
+
   std::size_t size() const { return steps_.size(); }
   const splat::Gaussians& first_moment() const { return m_; }
   const splat::Gaussians& second_moment() const { return v_; }

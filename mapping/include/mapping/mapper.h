@@ -1,6 +1,8 @@
 #pragma once
 #include <cstdint>
+#include <array>
 #include <deque>
+#include <functional>
 #include <random>
 #include <string>
 
@@ -85,6 +87,24 @@ struct MappingStats {
   std::size_t window = 0;
 };
 
+// What a Mapper carries from one keyframe to the next, for checkpoints: all of it but the stored
+// keyframes' images, which Mapper::restore takes back from the caller.
+struct MapperState {
+  splat::Gaussians map;
+  GaussianAdam::State adam;
+  struct Keyframe {
+    std::size_t number = 0;
+    Eigen::Isometry3d T_cam_world = Eigen::Isometry3d::Identity();
+    PoseAdam pose;
+  };
+  std::vector<Keyframe> keyframes;  // oldest first
+  Vignetting vignetting;
+  std::array<double, 2> vignetting_m = {0, 0}, vignetting_v = {0, 0};
+  int vignetting_steps = 0;
+  std::size_t added = 0;  // keyframes added so far
+  std::string rng;        // the window sampler, as std::mt19937's operator<< writes it
+};
+
 // Builds and refines the map from keyframes with known poses. Memory apart from the map is
 // bounded by max_keyframes.
 class Mapper {
@@ -107,6 +127,11 @@ class Mapper {
   splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
   // Removes transparent and oversized Gaussians; returns how many.
   std::size_t prune();
+
+  MapperState state() const;
+  // Continues from `state` (of a mapper with this configuration): `load(number)` gives keyframe
+  // `number` as add_keyframe() was given it. Throws splat::Error on an inconsistent state.
+  void restore(MapperState state, const std::function<splat::RgbdFrame(std::size_t number)>& load);
 
   const splat::Gaussians& map() const { return map_; }
   const Vignetting& vignetting() const { return vignetting_; }
@@ -143,7 +168,7 @@ class Mapper {
   std::deque<Keyframe> keyframes_;
   Vignetting vignetting_;
   struct {
-    double m[2] = {0, 0}, v[2] = {0, 0};
+    std::array<double, 2> m = {0, 0}, v = {0, 0};
     int steps = 0;
   } vignetting_adam_;
   std::size_t added_ = 0;

@@ -1,0 +1,241 @@
+#include "io/run_checkpoint.h"
+
+#include <bit>
+#include <cstring>
+#include <fstream>
+
+#include "io/atomic_file.h"
+#include "io/file_error.h"
+
+namespace app {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "checkpoints hold little-endian arrays");
+constexpr char kMagic[] = "gslam checkpoint 1\n";
+using json = nlohmann::json;
+
+json vector_to_json(const double* v, int n) { return json(std::vector<double>(v, v + n)); }
+
+template <std::size_t N>
+void vector_from_json(const json& j, double* out) {
+  const auto v = j.get<std::vector<double>>();
+  if (v.size() != N) throw splat::Error("expected " + std::to_string(N) + " numbers, got " + std::to_string(v.size()));
+  std::copy(v.begin(), v.end(), out);
+}
+
+json poses_to_json(const std::vector<Eigen::Isometry3d>& poses) {
+  json j = json::array();
+  for (const auto& T : poses) j.push_back(pose_to_json(T));
+  return j;
+}
+
+std::vector<Eigen::Isometry3d> poses_from_json(const json& j) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (const json& p : j.get_ref<const json::array_t&>()) poses.push_back(pose_from_json(p));
+  return poses;
+}
+
+json tracker_to_json(const FrameTracker::State& t) {
+  return {{"last_poses", poses_to_json(t.last_poses)}, {"last_times", t.last_times},
+          {"last_keyframe", pose_to_json(t.last_keyframe)}, {"since_keyframe", t.since_keyframe},
+          {"references", t.references}};
+}
+
+FrameTracker::State tracker_from_json(const json& j) {
+  return {poses_from_json(j.at("last_poses")), j.at("last_times").get<std::vector<double>>(),
+          pose_from_json(j.at("last_keyframe")), j.at("since_keyframe").get<int>(),
+          j.at("references").get<std::vector<std::size_t>>()};
+}
+
+json mapper_to_json(const mapping::MapperState& m) {
+  json keyframes = json::array();
+  for (const auto& kf : m.keyframes) {
+    keyframes.push_back({{"number", kf.number}, {"T_cam_world", pose_to_json(kf.T_cam_world)},
+                         {"adam_m", vector_to_json(kf.pose.m.data(), 6)}, {"adam_v", vector_to_json(kf.pose.v.data(), 6)},
+                         {"adam_steps", kf.pose.steps}});
+  }
+  return {{"sh_degree", m.map.sh_degree}, {"keyframes", keyframes},
+          {"vignetting", {m.vignetting.k1, m.vignetting.k2}}, {"vignetting_m", m.vignetting_m},
+          {"vignetting_v", m.vignetting_v}, {"vignetting_steps", m.vignetting_steps},
+          {"added", m.added}, {"rng", m.rng}};
+}
+
+mapping::MapperState mapper_from_json(const json& j) {
+  mapping::MapperState m;
+  m.map.sh_degree = m.adam.m.sh_degree = m.adam.v.sh_degree = j.at("sh_degree").get<int>();
+  for (const json& kf : j.at("keyframes").get_ref<const json::array_t&>()) {
+    mapping::MapperState::Keyframe k;
+    k.number = kf.at("number").get<std::size_t>();
+    k.T_cam_world = pose_from_json(kf.at("T_cam_world"));
+    vector_from_json<6>(kf.at("adam_m"), k.pose.m.data());
+    vector_from_json<6>(kf.at("adam_v"), k.pose.v.data());
+    k.pose.steps = kf.at("adam_steps").get<int>();
+    m.keyframes.push_back(k);
+  }
+  double vignetting[2];
+  vector_from_json<2>(j.at("vignetting"), vignetting);
+  m.vignetting = {vignetting[0], vignetting[1]};
+  vector_from_json<2>(j.at("vignetting_m"), m.vignetting_m.data());
+  vector_from_json<2>(j.at("vignetting_v"), m.vignetting_v.data());
+  m.vignetting_steps = j.at("vignetting_steps").get<int>();
+  m.added = j.at("added").get<std::size_t>();
+  m.rng = j.at("rng").get<std::string>();
+  return m;
+}
+
+json frames_to_json(const std::vector<SlamSystem::FramePose>& frames) {
+  json j = json::array();
+  for (const auto& f : frames) {
+    j.push_back({{"keyframe", f.keyframe == SlamSystem::kNoKeyframe ? json(nullptr) : json(f.keyframe)},
+                 {"T_keyframe_cam", pose_to_json(f.T_keyframe_cam)}, {"tracked", f.tracked},
+                 {"is_keyframe", f.is_keyframe}});
+  }
+  return j;
+}
+
+std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
+  std::vector<SlamSystem::FramePose> frames;
+  for (const json& f : j.get_ref<const json::array_t&>()) {
+    const json& keyframe = f.at("keyframe");
+    frames.push_back({keyframe.is_null() ? SlamSystem::kNoKeyframe : keyframe.get<std::size_t>(),
+                      pose_from_json(f.at("T_keyframe_cam")), f.at("tracked").get<bool>(),
+                      f.at("is_keyframe").get<bool>()});
+  }
+  return frames;
+}
+
+json totals_to_json(const MappingTotals& t) {
+  return {{"keyframes_mapped", t.keyframes_mapped}, {"keyframes_skipped", t.keyframes_skipped},
+          {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
+          {"iterations", t.iterations},             {"last_loss", t.last_loss},
+          {"mapping_ms", t.mapping_ms}};
+}
+
+MappingTotals totals_from_json(const json& j) {
+  return {j.at("keyframes_mapped").get<std::size_t>(), j.at("keyframes_skipped").get<std::size_t>(),
+          j.at("gaussians_added").get<std::size_t>(),  j.at("gaussians_pruned").get<std::size_t>(),
+          j.at("iterations").get<std::size_t>(),       j.at("last_loss").get<double>(),
+          j.at("mapping_ms").get<double>()};
+}
+
+// The map's and the optimizer's arrays, in one fixed order (State: const or not).
+template <typename State, typename Visit>
+void for_each_array(State& s, Visit visit) {
+  for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.map, g));
+  for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.adam.m, g));
+  for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.adam.v, g));
+  visit(s.mapper.adam.steps);
+}
+
+// Reads exactly the bytes the file has, never more than remain.
+class BoundedReader {
+ public:
+  explicit BoundedReader(const std::filesystem::path& path) : path_(path), in_(path, std::ios::binary) {
+    if (!in_) fail(path, "cannot open checkpoint");
+    std::error_code ec;
+    remaining_ = std::filesystem::file_size(path, ec);
+    if (ec) fail(path, "cannot read checkpoint size: " + ec.message());
+  }
+  void read(void* out, std::uint64_t bytes, const std::string& what) {
+    if (bytes > remaining_) {
+      fail(path_, "truncated checkpoint: " + what + " needs " + std::to_string(bytes) + " bytes, " +
+                      std::to_string(remaining_) + " remain");
+    }
+    if (!in_.read(static_cast<char*>(out), static_cast<std::streamsize>(bytes))) fail(path_, "cannot read " + what);
+    remaining_ -= bytes;
+  }
+  std::uint64_t remaining() const { return remaining_; }
+
+ private:
+  std::filesystem::path path_;
+  std::ifstream in_;
+  std::uint64_t remaining_ = 0;
+};
+
+}  // namespace
+
+json pose_to_json(const Eigen::Isometry3d& T) {
+  json j = json::array();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) j.push_back(T.matrix()(r, c));
+  return j;
+}
+
+Eigen::Isometry3d pose_from_json(const json& j) {
+  const auto v = j.get<std::vector<double>>();
+  if (v.size() != 12) throw splat::Error("a pose has 12 numbers (3x4, row by row), got " + std::to_string(v.size()));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) T.matrix()(r, c) = v[static_cast<std::size_t>(4 * r + c)];
+  if (!T.matrix().allFinite()) throw splat::Error("a pose holds a non-finite number");
+  return T;
+}
+
+void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint& checkpoint) {
+  const SlamSystem::State& s = checkpoint.slam;
+  const json header = {{"run", checkpoint.run},
+                       {"tracker", tracker_to_json(s.tracker)},
+                       {"mapper", mapper_to_json(s.mapper)},
+                       {"mapper_keyframes", s.mapper_keyframes},
+                       {"keyframe_world", poses_to_json(s.keyframe_world)},
+                       {"frames", frames_to_json(s.frames)},
+                       {"totals", totals_to_json(s.totals)}};
+  const std::string text = header.dump();
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    const std::uint64_t length = text.size();
+    out.write(kMagic, sizeof(kMagic) - 1);
+    out.write(reinterpret_cast<const char*>(&length), sizeof(length));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    for_each_array(s, [&](const auto& values) {
+      const std::uint64_t n = values.size();
+      out.write(reinterpret_cast<const char*>(&n), sizeof(n));
+      out.write(reinterpret_cast<const char*>(values.data()),
+                static_cast<std::streamsize>(n * sizeof(values[0])));
+    });
+    if (!out.flush()) fail(tmp, "cannot write checkpoint");
+  });
+}
+
+RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
+  BoundedReader in(path);
+  char magic[sizeof(kMagic) - 1];
+  in.read(magic, sizeof(magic), "header");
+  if (std::memcmp(magic, kMagic, sizeof(magic)) != 0) fail(path, "not a gslam checkpoint");
+  std::uint64_t length = 0;
+  in.read(&length, sizeof(length), "header length");
+  if (length > in.remaining()) fail(path, "truncated checkpoint: header of " + std::to_string(length) + " bytes");
+  std::string text(length, '\0');
+  in.read(text.data(), length, "header");
+  RunCheckpoint c;
+  try {
+    const json header = json::parse(text);
+    c.run = header.at("run");
+    c.slam.tracker = tracker_from_json(header.at("tracker"));
+    c.slam.mapper = mapper_from_json(header.at("mapper"));
+    c.slam.mapper_keyframes = header.at("mapper_keyframes").get<std::vector<std::size_t>>();
+    c.slam.keyframe_world = poses_from_json(header.at("keyframe_world"));
+    c.slam.frames = frames_from_json(header.at("frames"));
+    c.slam.totals = totals_from_json(header.at("totals"));
+  } catch (const json::exception& e) {
+    fail(path, std::string("malformed checkpoint header: ") + e.what());
+  } catch (const splat::Error& e) {
+    fail(path, std::string("malformed checkpoint header: ") + e.what());
+  }
+  int index = 0;
+  for_each_array(c.slam, [&](auto& values) {
+    const std::string what = "array " + std::to_string(index++);
+    std::uint64_t n = 0;
+    in.read(&n, sizeof(n), what + " length");
+    if (n > in.remaining() / sizeof(values[0])) {
+      fail(path, "truncated checkpoint: " + what + " claims " + std::to_string(n) + " values, " +
+                     std::to_string(in.remaining()) + " bytes remain");
+    }
+    values.resize(n);
+    in.read(values.data(), n * sizeof(values[0]), what);
+  });
+  if (in.remaining() != 0) fail(path, std::to_string(in.remaining()) + " bytes after the checkpoint's last array");
+  return c;
+}
+
+}  // namespace app

@@ -1,0 +1,120 @@
+// Checkpoints: a run stopped, written to a checkpoint, read back and continued ends exactly as
+// the run that never stopped; hostile checkpoint files get one-line errors.
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "datasets/dataset.h"
+#include "datasets/synthetic_sequence.h"
+#include "io/run_checkpoint.h"
+#include "slam/slam_system.h"
+#include "support/backends.h"
+#include "support/expect_error.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+// Small enough to run in a second, long enough that keyframes leave the mapper's store and the
+// tracker's references, and that mapping moves keyframes (its pose Adam state matters).
+app::SlamConfig checkpoint_config() {
+  app::SlamConfig config;
+  config.mapping.iterations = 6;
+  config.mapping.max_keyframes = 3;
+  config.mapping.pose_learning_rate = 2e-4;
+  config.mapping.pose_rotation_learning_rate = 5e-5;
+  config.keyframe_every = 2;
+  config.refine_passes = 2;
+  return config;
+}
+
+struct RunResult {
+  std::vector<Eigen::Isometry3d> trajectory;
+  splat::Gaussians map;
+};
+
+// Processes frames [0, stop), checkpoints through `file`, continues in a new system (and a new
+// rasterizer) from [stop, end), then sweeps. stop = end: never checkpointed.
+RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesystem::path& file) {
+  const auto load = [&](std::size_t i) { return dataset.load(i); };
+  const app::SlamConfig config = checkpoint_config();
+  auto first_rasterizer = splat::make_cpu_rasterizer({2});
+  auto slam = std::make_unique<app::SlamSystem>(*first_rasterizer, config);
+  for (std::size_t i = 0; i < stop; ++i) slam->process(load(i));
+  auto second_rasterizer = splat::make_cpu_rasterizer({2});
+  if (stop < dataset.entries.size()) {
+    app::write_run_checkpoint(file, {slam->state(), {{"note", "test"}}});
+    slam = std::make_unique<app::SlamSystem>(*second_rasterizer, config);
+    const app::RunCheckpoint read = app::read_run_checkpoint(file);
+    EXPECT_EQ(read.run.at("note"), "test");
+    slam->restore(read.slam, load);
+    for (std::size_t i = stop; i < dataset.entries.size(); ++i) slam->process(load(i));
+  }
+  slam->refine_map(load);
+  return {slam->trajectory(), *slam->map()};
+}
+
+TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 14;
+  app::write_synthetic_sequence(dir / "seq", o);
+  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const RunResult straight = run(dataset, dataset.entries.size(), {});
+  for (std::size_t stop : {1u, 6u, 11u}) {
+    const RunResult resumed = run(dataset, stop, dir / "checkpoint.bin");
+    ASSERT_EQ(resumed.trajectory.size(), straight.trajectory.size());
+    for (std::size_t i = 0; i < straight.trajectory.size(); ++i) {
+      const Eigen::Matrix4d& a = straight.trajectory[i].matrix();
+      const Eigen::Matrix4d& b = resumed.trajectory[i].matrix();
+      EXPECT_TRUE(std::equal(a.data(), a.data() + 16, b.data())) << "stopped at " << stop << ", frame " << i;
+    }
+    EXPECT_EQ(resumed.map.means, straight.map.means) << "stopped at " << stop;
+    EXPECT_EQ(resumed.map.sh, straight.map.sh) << "stopped at " << stop;
+    EXPECT_EQ(resumed.map.opacity_logits, straight.map.opacity_logits) << "stopped at " << stop;
+  }
+}
+
+TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 4;
+  app::write_synthetic_sequence(dir / "seq", o);
+  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  auto rasterizer = splat::make_cpu_rasterizer({2});
+  app::SlamSystem slam(*rasterizer, checkpoint_config());
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) slam.process(dataset.load(i));
+  const auto good = dir / "good.bin";
+  app::write_run_checkpoint(good, {slam.state(), {}});
+  const std::string bytes = gslam::test::read_text(good);
+  auto write = [&](const std::string& name, const std::string& content) {
+    gslam::test::write_text(dir / name, content);
+    return dir / name;
+  };
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "missing.bin"), "missing.bin", "cannot open");
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("magic.bin", "PLY\n" + bytes)), "magic.bin", "not a gslam checkpoint");
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("short.bin", bytes.substr(0, bytes.size() - 7))), "short.bin", "truncated");
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("long.bin", bytes + "x")), "long.bin", "1 bytes after");
+  // A header length, then an array length, claiming far more than the file holds.
+  std::string huge_header = bytes;
+  const std::size_t magic = std::string("gslam checkpoint 1\n").size();
+  huge_header[magic + 6] = '\x7f';
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("header.bin", huge_header)), "header.bin", "truncated");
+  std::uint64_t header_length = 0;
+  std::memcpy(&header_length, bytes.data() + magic, 8);
+  std::string huge_array = bytes;
+  huge_array[magic + 8 + header_length + 6] = '\x7f';
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("array.bin", huge_array)), "array.bin", "array 0", "claims");
+  // Valid framing around a header that is not what a checkpoint holds.
+  std::string wrong = bytes;
+  const std::size_t frames = wrong.find("\"frames\"", magic + 8);
+  ASSERT_NE(frames, std::string::npos);
+  wrong.replace(frames, 8, "\"framez\"");
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("fields.bin", wrong)), "fields.bin", "malformed", "frames");
+  // A state that reads but does not hold together is refused by the system, not followed.
+  app::RunCheckpoint c = app::read_run_checkpoint(good);
+  c.slam.keyframe_world.pop_back();
+  app::SlamSystem fresh(*rasterizer, checkpoint_config());
+  GSLAM_EXPECT_ERROR(fresh.restore(c.slam, [&](std::size_t i) { return dataset.load(i); }), "keyframe poses");
+}
+
+}  // namespace
