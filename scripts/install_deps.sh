@@ -13,12 +13,22 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install: all ${#packages[@]} packages present"
-  exit 0
-fi
+# Node runs the Khronos glTF validator in the tests; any Node (Debian's, or one already there).
+command -v node > /dev/null && command -v npm > /dev/null || missing+=(nodejs npm)
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-echo "install: ${missing[*]}"
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install: all ${#packages[@]} packages present"
+else
+  echo "install: ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+# The glTF validator (a test tool) from the npm registry, pinned, where the tests look for it.
+validator_dir=${GSLAM_TOOLS_DIR:-$HOME/.cache/gslam/tools}
+validator_version=2.0.0-dev.3.10
+if ! grep -qs "\"version\": \"$validator_version\"" "$validator_dir/node_modules/gltf-validator/package.json"; then
+  echo "install: gltf-validator@$validator_version into $validator_dir"
+  mkdir -p "$validator_dir"
+  npm install --prefix "$validator_dir" --no-audit --no-fund --silent "gltf-validator@$validator_version"
+fi

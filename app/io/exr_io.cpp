@@ -17,6 +17,10 @@ float srgb_to_linear(float v) {
   return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
 }
 
+float linear_to_srgb(float v) {
+  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
+}
+
 void write_render_exr(const std::filesystem::path& path, int width, int height,
                       std::span<const float> display_rgb, std::span<const float> alpha,
                       std::span<const float> depth, const std::array<float, 3>& background) {

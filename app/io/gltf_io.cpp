@@ -11,6 +11,7 @@
 
 #include "io/atomic_file.h"
 #include "io/file_error.h"
+#include "io/image_io.h"
 #include "splat/error.h"
 
 namespace app {
@@ -213,9 +214,10 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
     const int components = accessor.type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
     const std::vector<float> rgba = read_accessor(model, color, components, where + " COLOR_0", path, n);
     std::vector<float> dc(n * 3);
-    // COLOR_0 holds the diffuse colour SH_0 * C0 + 0.5; invert it.
+    // COLOR_0 holds the diffuse colour SH_0 * C0 + 0.5 (linear or display: read_gltf_splats
+    // decides for the whole file and inverts it).
     for (std::size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) dc[i * 3 + c] = static_cast<float>((rgba[i * components + c] - 0.5) / kShC0);
+      for (int c = 0; c < 3; ++c) dc[i * 3 + c] = rgba[i * components + c];
     coeffs.push_back(dc);
     out.sh_from_color0 = true;
     notices.push_back(where + ": no SH_DEGREE_0_COEF_0, diffuse colour taken from COLOR_0");
@@ -254,8 +256,8 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
       out.rotations_xyzw[i * 4 + 1] = static_cast<float>(q.y());
       out.rotations_xyzw[i * 4 + 2] = static_cast<float>(q.z());
       out.rotations_xyzw[i * 4 + 3] = static_cast<float>(q.w());
-      for (int a = 0; a < 3; ++a) out.log_scales[i * 3 + a] += static_cast<float>(std::log(scale));
     }
+    out.node_scale = scale;
   }
   return out;
 }
@@ -321,6 +323,26 @@ GltfSplatScene read_gltf_splats(const std::filesystem::path& path) {
   std::vector<uint8_t> visited(model.nodes.size(), 0);
   for (int root : roots) visit_nodes(model, root, Eigen::Matrix4d::Identity(), path, scene, visited, 0);
   if (scene.primitives.empty()) fail(path, "has no KHR_gaussian_splatting primitive");
+  // SCALE and COLOR_0 were read as stored; the file's draft decides what they mean.
+  for (const GltfSplatPrimitive& p : scene.primitives) {
+    scene.older_draft = scene.older_draft || std::any_of(p.log_scales.begin(), p.log_scales.end(), [](float v) { return v < 0; });
+  }
+  if (scene.older_draft) {
+    scene.notices.push_back("negative SCALE values: read as log-scales (and COLOR_0 as display values), as drafts "
+                            "of KHR_gaussian_splatting before April 2026 wrote them");
+  }
+  constexpr float kMinScale = 1e-12f;  // a linear 0 (allowed) as a finite log
+  for (GltfSplatPrimitive& p : scene.primitives) {
+    const float log_node_scale = static_cast<float>(std::log(p.node_scale));
+    for (float& v : p.log_scales) v = (scene.older_draft ? v : std::log(std::max(v, kMinScale))) + log_node_scale;
+    if (!p.sh_from_color0) continue;
+    for (std::size_t i = 0; i < p.sh.size(); i += 3) {  // DC alone
+      for (int c = 0; c < 3; ++c) {
+        const float display = scene.older_draft ? p.sh[i + c] : linear_to_srgb(std::clamp(p.sh[i + c], 0.f, 1.f));
+        p.sh[i + c] = static_cast<float>((display - 0.5) / kShC0);
+      }
+    }
+  }
   return scene;
 }
 
@@ -401,7 +423,8 @@ void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
   model.extensionsUsed = {kExtension};
   model.buffers.resize(1);
 
-  std::vector<float> rotations(n * 4), opacities(n), colors(n * 4);
+  std::vector<float> rotations(n * 4), opacities(n), colors(n * 4), scales(n * 3);
+  for (std::size_t i = 0; i < n * 3; ++i) scales[i] = std::exp(g.log_scales[i]);
   for (std::size_t i = 0; i < n; ++i) {
     const float* q = &g.rotations[i * 4];
     double norm = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2] + double(q[3]) * q[3]);
@@ -413,7 +436,8 @@ void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
     const double opacity = 1 / (1 + std::exp(-static_cast<double>(g.opacity_logits[i])));
     opacities[i] = static_cast<float>(opacity);
     for (int c = 0; c < 3; ++c) {
-      colors[i * 4 + c] = static_cast<float>(std::clamp(g.sh[i * k * 3 + c] * kShC0 + 0.5, 0.0, 1.0));
+      const double display = std::clamp(g.sh[i * k * 3 + c] * kShC0 + 0.5, 0.0, 1.0);
+      colors[i * 4 + c] = srgb_to_linear(static_cast<float>(display));
     }
     colors[i * 4 + 3] = opacities[i];
   }
@@ -421,7 +445,7 @@ void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
   prim.mode = TINYGLTF_MODE_POINTS;
   prim.attributes["POSITION"] = add_float_accessor(model, g.means, TINYGLTF_TYPE_VEC3, n, true);
   prim.attributes[std::string(kPrefix) + "ROTATION"] = add_float_accessor(model, rotations, TINYGLTF_TYPE_VEC4, n, false);
-  prim.attributes[std::string(kPrefix) + "SCALE"] = add_float_accessor(model, g.log_scales, TINYGLTF_TYPE_VEC3, n, false);
+  prim.attributes[std::string(kPrefix) + "SCALE"] = add_float_accessor(model, scales, TINYGLTF_TYPE_VEC3, n, false);
   prim.attributes[std::string(kPrefix) + "OPACITY"] = add_float_accessor(model, opacities, TINYGLTF_TYPE_SCALAR, n, false);
   prim.attributes["COLOR_0"] = add_float_accessor(model, colors, TINYGLTF_TYPE_VEC4, n, false);
   for (int degree = 0; degree <= g.sh_degree; ++degree) {

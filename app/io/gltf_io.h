@@ -14,21 +14,28 @@ struct GltfSplatPrimitive {
   std::string name;                 // node name, else mesh name
   std::vector<float> positions;     // [N, 3]
   std::vector<float> rotations_xyzw;  // [N, 4] as stored: x, y, z, w
-  std::vector<float> log_scales;    // [N, 3] KHR SCALE is log-space
+  std::vector<float> log_scales;    // [N, 3] natural log of SCALE (see read_gltf_splats)
   std::vector<float> opacities;     // [N] in [0, 1]
   std::vector<float> sh;            // [N, K, 3]
   int sh_degree = 0;
   std::string kernel;       // as stored; unknown kernels fall back to "ellipse"
   std::string color_space;  // as stored; unknown ones are treated as srgb_rec709_display
   bool sh_from_color0 = false;  // no SH_DEGREE_0 attribute: DC derived from COLOR_0
+  double node_scale = 1;        // the node transform's uniform scale, folded into log_scales
 };
 
 struct GltfSplatScene {
   std::vector<GltfSplatPrimitive> primitives;
+  bool older_draft = false;  // SCALE held log-scales and COLOR_0 display values (read_gltf_splats)
   std::vector<std::string> notices;  // fallbacks taken (unknown kernel, colour space, ...)
 };
 
-// Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file. Throws splat::Error
+// Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file. SCALE is linear and
+// never negative in the extension's text since April 2026; drafts before it stored log-scales,
+// and their writers COLOR_0 as display (sRGB-encoded) values. The rule: a file with any negative
+// SCALE value was written to an older draft, and all its SCALEs are read as log-scales and its
+// COLOR_0 as display values; otherwise SCALE is linear (0 read as 1e-12 m) and COLOR_0 linear, as
+// glTF defines vertex colours. Throws splat::Error
 // naming the file and the element for unreadable files, missing or malformed attributes,
 // partially defined SH degrees, non-similarity node transforms and NaN/Inf values.
 GltfSplatScene read_gltf_splats(const std::filesystem::path& path);
@@ -38,9 +45,9 @@ GltfSplatScene read_gltf_splats(const std::filesystem::path& path);
 splat::Gaussians to_gaussians(const GltfSplatScene& scene);
 
 // Writes the map as a .glb (or .gltf with embedded buffers, by extension) with one POINTS
-// primitive: POSITION, KHR_gaussian_splatting ROTATION (unit, xyzw), SCALE (log), OPACITY,
-// SH_DEGREE_l_COEF_n for every degree of the map, and COLOR_0 (diffuse colour and opacity)
-// for viewers without the extension. Coordinates are written as they are (no axis change).
+// primitive: POSITION, KHR_gaussian_splatting ROTATION (unit, xyzw), SCALE (linear, metres),
+// OPACITY, SH_DEGREE_l_COEF_n for every degree of the map, and COLOR_0 (diffuse colour in linear
+// light, and opacity) for viewers without the extension. Coordinates are written as they are (no axis change).
 void write_gltf(const std::filesystem::path& path, const splat::Gaussians& gaussians);
 
 }  // namespace app

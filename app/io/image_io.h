@@ -45,6 +45,8 @@ void write_render_exr(const std::filesystem::path& path, int width, int height,
 
 // The sRGB transfer undone: display value to linear light (values above 1 follow the same curve).
 float srgb_to_linear(float v);
+// The sRGB transfer: linear light to display value (its inverse).
+float linear_to_srgb(float v);
 
 struct ExrImage {
   int width = 0, height = 0;

@@ -1,10 +1,14 @@
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 
 #include <gtest/gtest.h>
 
+#include <tiny_gltf.h>
+
 #include "io/gltf_io.h"
+#include "io/image_io.h"
 #include "support/expect_error.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
@@ -30,7 +34,9 @@ TEST(GltfFormat, RoundTripWithinFloatPrecision) {
     ASSERT_EQ(back.size(), map.size());
     ASSERT_EQ(back.sh_degree, 3);
     EXPECT_EQ(back.means, map.means) << name;
-    EXPECT_EQ(back.log_scales, map.log_scales) << name;
+    // SCALE is stored linear: exp, then log on reading.
+    ASSERT_EQ(back.log_scales.size(), map.log_scales.size());
+    for (std::size_t i = 0; i < map.log_scales.size(); ++i) EXPECT_NEAR(back.log_scales[i], map.log_scales[i], 1e-6f) << i;
     EXPECT_EQ(back.sh, map.sh) << name;
     for (std::size_t i = 0; i < map.size(); ++i) {
       // Rotations are stored normalized; compare the unit quaternions.
@@ -116,9 +122,9 @@ TEST(GltfFormat, BadInputGivesErrorNamingFileAndElement) {
 }
 
 // A one-splat .gltf whose JSON is `json` with its buffer in `bin` beside it: crafted files.
-std::filesystem::path write_crafted(const TempDir& dir, const std::string& name, const std::string& json) {
-  std::vector<float> data(12 + 3, 0.f);  // POSITION vec3, ROTATION vec4, SCALE vec3, OPACITY, COLOR_0 vec3 (short)
-  data[6] = 1.f;
+// `data`: POSITION vec3, ROTATION vec4, SCALE vec3, OPACITY, COLOR_0 vec3 (15 floats).
+std::filesystem::path write_crafted(const TempDir& dir, const std::string& name, const std::string& json,
+                                    std::vector<float> data = {0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0}) {
   std::ofstream(dir / "crafted.bin", std::ios::binary).write(reinterpret_cast<const char*>(data.data()), 60);
   std::ofstream(dir / name) << json;
   return dir / name;
@@ -145,6 +151,62 @@ std::string accessors(const std::string& position_count = "1", const std::string
     {"bufferView": 0, "byteOffset": 28, "componentType": 5126, "count": 1, "type": "VEC3"},
     {"bufferView": 0, "byteOffset": 40, "componentType": 5126, "count": 1, "type": "SCALAR"},
     {"bufferView": 0, "byteOffset": 44, "componentType": 5126, "count": )" + color_count + R"(, "type": "VEC3"}])";
+}
+
+// What gslam writes follows the extension's current text: SCALE linear (never negative) and
+// COLOR_0 in linear light, checked on the stored accessors.
+TEST(GltfFormat, WritesLinearScalesAndLinearColour) {
+  TempDir dir;
+  gslam::test::SceneOptions o;
+  o.count = 20;
+  const splat::Gaussians map = gslam::test::make_random_scene<float>(o).gaussians;
+  app::write_gltf(dir / "map.glb", map);
+  tinygltf::TinyGLTF loader;
+  tinygltf::Model model;
+  std::string err, warn;
+  ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &err, &warn, (dir / "map.glb").string())) << err;
+  const auto& attributes = model.meshes.at(0).primitives.at(0).attributes;
+  auto floats = [&](const std::string& name) {
+    const tinygltf::Accessor& a = model.accessors.at(static_cast<std::size_t>(attributes.at(name)));
+    const tinygltf::BufferView& v = model.bufferViews.at(static_cast<std::size_t>(a.bufferView));
+    return reinterpret_cast<const float*>(model.buffers.at(0).data.data() + v.byteOffset + a.byteOffset);
+  };
+  const float* scale = floats("KHR_gaussian_splatting:SCALE");
+  const float* color = floats("COLOR_0");
+  const std::size_t k = static_cast<std::size_t>((map.sh_degree + 1) * (map.sh_degree + 1));
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(scale[i * 3 + a], 0.f);
+      EXPECT_NEAR(scale[i * 3 + a], std::exp(map.log_scales[i * 3 + a]), 1e-6f * scale[i * 3 + a]);
+      const float display = std::clamp(map.sh[i * k * 3 + a] * 0.28209479177387814f + 0.5f, 0.f, 1.f);
+      EXPECT_NEAR(color[i * 4 + a], app::srgb_to_linear(display), 1e-6f) << "splat " << i;
+    }
+  }
+}
+
+// The rule for files of the older drafts: any negative SCALE means log-scales and display
+// COLOR_0 for the whole file; otherwise both are linear.
+TEST(GltfFormat, ReadsLinearFilesAndOlderDraftsByTheRule) {
+  TempDir dir;
+  const float linear_grey = app::srgb_to_linear(0.75f);
+  const auto linear = app::read_gltf_splats(write_crafted(dir, "linear.gltf", crafted_json(accessors()),
+                                                          {0, 0, 0, 0, 0, 0, 1, 0.5f, 2, 0, 0.5f, linear_grey, linear_grey, linear_grey, 0}));
+  EXPECT_FALSE(linear.older_draft);
+  const auto& l = linear.primitives.at(0);
+  EXPECT_NEAR(l.log_scales[0], std::log(0.5f), 1e-6f);
+  EXPECT_NEAR(l.log_scales[1], std::log(2.f), 1e-6f);
+  EXPECT_TRUE(std::isfinite(l.log_scales[2])) << "a linear 0 is a finite (tiny) scale";
+  EXPECT_NEAR(l.sh[0], (0.75f - 0.5f) / 0.28209479f, 1e-4f);
+  const auto older = app::read_gltf_splats(write_crafted(dir, "older.gltf", crafted_json(accessors()),
+                                                         {0, 0, 0, 0, 0, 0, 1, -1, 2, 0, 0.5f, 0.75f, 0.75f, 0.75f, 0}));
+  EXPECT_TRUE(older.older_draft);
+  const auto& o = older.primitives.at(0);
+  EXPECT_FLOAT_EQ(o.log_scales[0], -1.f);
+  EXPECT_FLOAT_EQ(o.log_scales[1], 2.f);
+  EXPECT_NEAR(o.sh[0], (0.75f - 0.5f) / 0.28209479f, 1e-4f);
+  bool noticed = false;
+  for (const std::string& n : older.notices) noticed = noticed || n.find("log-scales") != std::string::npos;
+  EXPECT_TRUE(noticed);
 }
 
 TEST(GltfFormat, CraftedFileIsReadWhenWellFormed) {
