@@ -65,6 +65,20 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
+  recon_cmd->add_option("--test-every", recon.test_every,
+                        "Hold out every N-th frame as a test view: tracked, never mapped (gslam eval scores them apart)")
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            const std::string expected = "expected 0 (none) or an integer >= 2, got '" + text + "'";
+            std::size_t used = 0;
+            try {
+              const long v = std::stol(text, &used);
+              return used == text.size() && (v == 0 || (v >= 2 && v <= 1000000)) ? std::string() : expected;
+            } catch (const std::exception&) {
+              return expected;
+            }
+          },
+          "N"));
   add_backend_options(*recon_cmd, recon.backend);
 
   EvalOptions eval;

@@ -39,6 +39,17 @@ mapping::Vignetting run_vignetting(const std::filesystem::path& run) {
   return v;
 }
 
+// Rendering quality summed over a set of views.
+struct RenderStats {
+  double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0, psnr_radiance = 0;
+  std::size_t frames = 0;
+  nlohmann::json to_json() const {
+    const double n = std::max<double>(1, static_cast<double>(frames));
+    return {{"frames", frames}, {"psnr_db", psnr / n}, {"ssim", ssim / n}, {"depth_l1_m", depth_l1 / n},
+            {"psnr_masked_valid_depth_db", psnr_masked / n}, {"psnr_without_vignetting_db", psnr_radiance / n}};
+  }
+};
+
 }  // namespace
 
 int run_eval(const EvalOptions& o) {
@@ -80,45 +91,58 @@ int run_eval(const EvalOptions& o) {
   for (const auto& e : dataset.entries) te.push_back(e.timestamp);
   const auto pairs = associate(te, ts, 1e-4);  // the run's lines carry the frames' own timestamps
   const mapping::Vignetting vignetting = run_vignetting(o.run);
-  double psnr = 0, psnr_masked = 0, ssim = 0, depth_l1 = 0, psnr_radiance = 0;
-  std::size_t rendered = 0;
+  // Training views (the frames mapping could use) and held-out test views (--test-every), apart.
+  RenderStats training, held_out;
   std::vector<double> frame_times, frame_psnr, frame_ssim;  // per rendered frame, for the plot
   Progress progress("eval renders", pairs.size(), "frames");
-  for (std::size_t k = 0; k < pairs.size(); k += static_cast<std::size_t>(std::max(1, o.every))) {
+  const std::size_t every = static_cast<std::size_t>(std::max(1, o.every));
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const bool test_view = is_held_out(pairs[k].first, recorded.test_every);
+    if (k % every != 0 && !test_view) continue;  // every test view is scored
     const splat::RgbdFrame frame = dataset.load(pairs[k].first);
     const splat::Camera cam = splat::posed(frame.camera, estimate[pairs[k].second].T_world_cam.inverse());
     splat::ForwardResult f = rasterizer->forward(map.gaussians, cam, {});
-    psnr_radiance += splat::psnr(f.rgb, frame.rgb, 3);
+    RenderStats& stats = test_view ? held_out : training;
+    stats.psnr_radiance += splat::psnr(f.rgb, frame.rgb, 3);
     vignetting.apply(f.rgb, cam);  // compared as the camera records it
     std::vector<float> valid(frame.depth.size()), grad(f.rgb.size());
     for (std::size_t p = 0; p < valid.size(); ++p) valid[p] = frame.depth[p] > 0 ? 1.f : 0.f;
-    frame_times.push_back(frame.timestamp);
-    frame_psnr.push_back(splat::psnr(f.rgb, frame.rgb, 3));
-    frame_ssim.push_back(1 - splat::dssim_loss<float>(f.rgb, frame.rgb, frame.width(), frame.height(), 3, grad));
-    psnr += frame_psnr.back();
-    psnr_masked += splat::psnr(f.rgb, frame.rgb, 3, valid);
-    ssim += frame_ssim.back();
+    const double frame_psnr_db = splat::psnr(f.rgb, frame.rgb, 3);
+    const double frame_ssim_value = 1 - splat::dssim_loss<float>(f.rgb, frame.rgb, frame.width(), frame.height(), 3, grad);
+    if (!test_view) {
+      frame_times.push_back(frame.timestamp);
+      frame_psnr.push_back(frame_psnr_db);
+      frame_ssim.push_back(frame_ssim_value);
+    }
+    stats.psnr += frame_psnr_db;
+    stats.psnr_masked += splat::psnr(f.rgb, frame.rgb, 3, valid);
+    stats.ssim += frame_ssim_value;
     std::vector<float> dgrad(f.depth.size());
-    depth_l1 += splat::depth_l1_loss<float>(f.depth_normalized, frame.depth, {}, dgrad);
-    ++rendered;
+    stats.depth_l1 += splat::depth_l1_loss<float>(f.depth_normalized, frame.depth, {}, dgrad);
+    ++stats.frames;
     progress.update(k + 1);
   }
   progress.finish();
-  const double n = std::max<double>(1, static_cast<double>(rendered));
+  const double n = std::max<double>(1, static_cast<double>(training.frames));
+  const double psnr = training.psnr, ssim = training.ssim, psnr_masked = training.psnr_masked,
+               psnr_radiance = training.psnr_radiance, depth_l1 = training.depth_l1;
 
+  nlohmann::json rendering = training.to_json();
+  rendering["vignetting"] = {{"k1", vignetting.k1}, {"k2", vignetting.k2}};
+  rendering["per_frame"] = {{"timestamp", frame_times}, {"psnr_db", frame_psnr}, {"ssim", frame_ssim}};
   nlohmann::json j = {
       {"run", o.run.string()},
       {"dataset", dataset_path.string()},
       {"alignment", o.sim3 ? "sim3" : "se3"},
       {"ate", {{"rmse_m", errors.ate_rmse}, {"mean_m", errors.ate_mean}, {"max_m", errors.ate_max}, {"matched_frames", errors.matched}, {"scale", errors.scale}}},
       {"rpe_1s", {{"translation_rmse_m", errors.rpe_translation_rmse}, {"rotation_rmse_deg", errors.rpe_rotation_rmse_deg}, {"pairs", errors.rpe_pairs}}},
-      {"rendering", {{"frames", rendered}, {"psnr_db", psnr / n}, {"ssim", ssim / n}, {"depth_l1_m", depth_l1 / n},
-                     {"psnr_masked_valid_depth_db", psnr_masked / n},
-                     {"psnr_without_vignetting_db", psnr_radiance / n},
-                     {"vignetting", {{"k1", vignetting.k1}, {"k2", vignetting.k2}}},
-                     {"per_frame", {{"timestamp", frame_times}, {"psnr_db", frame_psnr}, {"ssim", frame_ssim}}}}},
+      {"rendering", rendering},
       {"gaussians", map.gaussians.size()},
   };
+  if (recorded.test_every > 0) {
+    j["held_out_rendering"] = held_out.to_json();
+    j["held_out_rendering"]["test_every"] = recorded.test_every;
+  }
   write_json(o.run / "eval.json", j);
 
   // Plots: top view (the two axes along which the truth moves most) and error over time.
@@ -162,9 +186,15 @@ int run_eval(const EvalOptions& o) {
     write_png_rgb8(o.run / "psnr_over_time.png", quality.render());
   }
 
-  std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth, %.2f dB without vignetting), SSIM %.3f, depth L1 %.2f cm -> %s\n",
+  std::printf("ATE RMSE %.2f cm over %zu frames, RPE(1 s) %.2f cm / %.2f deg, PSNR %.2f dB (%.2f dB over valid depth, %.2f dB without vignetting), SSIM %.3f, depth L1 %.2f cm",
               errors.ate_rmse * 100, errors.matched, errors.rpe_translation_rmse * 100, errors.rpe_rotation_rmse_deg,
-              psnr / n, psnr_masked / n, psnr_radiance / n, ssim / n, depth_l1 / n * 100, (o.run / "eval.json").c_str());
+              psnr / n, psnr_masked / n, psnr_radiance / n, ssim / n, depth_l1 / n * 100);
+  if (held_out.frames > 0) {
+    const double h = static_cast<double>(held_out.frames);
+    std::printf("; held-out views (%zu): PSNR %.2f dB, SSIM %.3f, depth L1 %.2f cm", held_out.frames,
+                held_out.psnr / h, held_out.ssim / h, held_out.depth_l1 / h * 100);
+  }
+  std::printf(" -> %s\n", (o.run / "eval.json").c_str());
   return 0;
 }
 

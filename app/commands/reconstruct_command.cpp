@@ -26,12 +26,13 @@ struct RunPlan {
   std::filesystem::path input;
   DatasetOptions dataset_options;
   SlamConfig config;
+  int test_every = 0;
   std::optional<RunCheckpoint> checkpoint;
 };
 
 RunPlan plan_resume(const ReconstructOptions& o) {
   if (!o.dataset.empty() || !o.config.empty() || !o.dataset_options.intrinsics.empty() ||
-      o.dataset_options.depth_scale > 0 || o.dataset_options.max_frames > 0 || o.overwrite) {
+      o.dataset_options.depth_scale > 0 || o.dataset_options.max_frames > 0 || o.test_every > 0 || o.overwrite) {
     throw splat::Error("reconstruct --resume continues with the interrupted run's dataset and configuration: "
                        "give only --out (and backend options)");
   }
@@ -47,11 +48,12 @@ RunPlan plan_resume(const ReconstructOptions& o) {
   plan.input = recorded.dataset;
   plan.dataset_options = recorded.options;
   plan.config = slam_config_from_json(recorded.config);
+  plan.test_every = recorded.test_every;
   return plan;
 }
 
 RunPlan plan_new_run(const ReconstructOptions& o) {
-  RunPlan plan{o.dataset, o.dataset_options, load_slam_config(o.config), std::nullopt};  // first: a bad file costs nothing
+  RunPlan plan{o.dataset, o.dataset_options, load_slam_config(o.config), o.test_every, std::nullopt};  // first: a bad file costs nothing
   if (plan.input.empty() && !o.out.empty()) {
     plan.input = o.out / "synthetic_input";
     std::fprintf(stderr, "no dataset given: generating the bundled synthetic sequence into %s\n", plan.input.c_str());
@@ -104,7 +106,7 @@ int run_reconstruct(const ReconstructOptions& o) {
   } else {
     outputs_owner = std::make_unique<RunOutputs>(o.out, input.string(), *rasterizer, o.overwrite);
     // What the run read, so that eval and --resume use the same camera, depth units and settings.
-    outputs_owner->extra()["input"] = run_input_json(input, dataset, plan.dataset_options.max_frames, config);
+    outputs_owner->extra()["input"] = run_input_json(input, dataset, plan.dataset_options.max_frames, plan.test_every, config);
   }
   RunOutputs& outputs = *outputs_owner;
   const auto save_state = [&] { write_run_checkpoint(o.out / kCheckpointFile, {slam.state(), outputs.state()}); };
@@ -118,7 +120,7 @@ int run_reconstruct(const ReconstructOptions& o) {
     const splat::RgbdFrame frame = dataset.load(i);
     const double loading_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
-    const FrameRecord record = slam.process(frame);
+    const FrameRecord record = slam.process(frame, is_held_out(i, plan.test_every));
     if (!record.tracked) std::fprintf(stderr, "\nframe %zu: tracking failed (%s)\n", i, record.reason.c_str());
     outputs.add(record, loading_ms);
     progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes()) + " keyframes");

@@ -16,6 +16,7 @@ struct ReconstructOptions {
   bool print_config = false;      // write the effective configuration as JSON and stop
   bool overwrite = false;         // replace another run's outputs in `out`
   bool resume = false;            // continue the interrupted run in `out` from its checkpoint
+  int test_every = 0;             // every N-th frame is a held-out test view (run_input.h)
   int checkpoint_every = 10;      // frames between atomic trajectory/summary checkpoints;
                                   // map.ply is checkpointed every 5x that
 };

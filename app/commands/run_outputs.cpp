@@ -1,5 +1,6 @@
 #include "commands/run_outputs.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 
@@ -62,6 +63,7 @@ RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat
       r.retried = f.at("retried").get<bool>();
       r.reason = f.at("reason").get<std::string>();
       r.keyframe = f.at("keyframe").get<bool>();
+      r.held_out = f.at("held_out").get<bool>();
       r.renders = f.at("renders").get<int>();
       r.overlap = f.at("overlap").get<double>();
       r.tracking_ms = f.at("tracking_ms").get<double>();
@@ -82,7 +84,7 @@ nlohmann::json RunOutputs::state() const {
   for (const FrameRecord& r : records_) {
     frames.push_back({{"timestamp", r.timestamp}, {"T_world_cam", pose_to_json(r.T_world_cam)},
                       {"tracked", r.tracked}, {"retried", r.retried}, {"reason", r.reason},
-                      {"keyframe", r.keyframe}, {"renders", r.renders}, {"overlap", r.overlap},
+                      {"keyframe", r.keyframe}, {"held_out", r.held_out}, {"renders", r.renders}, {"overlap", r.overlap},
                       {"tracking_ms", r.tracking_ms}, {"mapping_ms", r.mapping_ms}, {"gaussians", r.gaussians}});
   }
   return {{"run_id", run_id_}, {"seconds", elapsed_seconds()}, {"tracking_ms", tracking_ms_},
@@ -139,6 +141,7 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
         {"loading", loading_ms_ / n}}},
       {"tracking_failures", failures_},
       {"tracking_retries", retries_},
+      {"held_out_frames", std::count_if(records_.begin(), records_.end(), [](const FrameRecord& r) { return r.held_out; })},
       {"peak_memory_mib", peak_memory_mib()},
       {"device_memory_mib", static_cast<double>(rasterizer_.device_memory_bytes()) / (1 << 20)},
   };

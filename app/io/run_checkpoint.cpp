@@ -88,7 +88,7 @@ json frames_to_json(const std::vector<SlamSystem::FramePose>& frames) {
   for (const auto& f : frames) {
     j.push_back({{"keyframe", f.keyframe == SlamSystem::kNoKeyframe ? json(nullptr) : json(f.keyframe)},
                  {"T_keyframe_cam", pose_to_json(f.T_keyframe_cam)}, {"tracked", f.tracked},
-                 {"is_keyframe", f.is_keyframe}});
+                 {"is_keyframe", f.is_keyframe}, {"held_out", f.held_out}});
   }
   return j;
 }
@@ -99,7 +99,7 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
     const json& keyframe = f.at("keyframe");
     frames.push_back({keyframe.is_null() ? SlamSystem::kNoKeyframe : keyframe.get<std::size_t>(),
                       pose_from_json(f.at("T_keyframe_cam")), f.at("tracked").get<bool>(),
-                      f.at("is_keyframe").get<bool>()});
+                      f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>()});
   }
   return frames;
 }

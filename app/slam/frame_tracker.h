@@ -28,6 +28,7 @@ struct FrameRecord {
   bool retried = false;
   std::string reason;   // why tracking failed
   bool keyframe = false;
+  bool held_out = false;  // a test view: tracked, never mapped
   int renders = 0;      // rasterizer forward passes spent on tracking
   double overlap = 1;   // odometry: fraction of the reference's points this frame sees
   double tracking_ms = 0, mapping_ms = 0;

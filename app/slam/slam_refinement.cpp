@@ -12,7 +12,9 @@ std::vector<std::size_t> SlamSystem::refine_frames() const {
   std::lock_guard lock(mutex_);
   std::vector<std::size_t> frames;
   for (std::size_t i = 0; i < frames_.size(); ++i) {
-    if (frames_[i].is_keyframe || (config_.refine_all_frames && frames_[i].tracked)) frames.push_back(i);
+    if (frames_[i].is_keyframe || (config_.refine_all_frames && frames_[i].tracked && !frames_[i].held_out)) {
+      frames.push_back(i);
+    }
   }
   return frames;
 }

@@ -112,17 +112,19 @@ double measured_fraction(const splat::RgbdFrame& frame) {
 }
 }  // namespace
 
-FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
+FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   rethrow_mapping_error();
   FrameRecord record;
-  const double measured = tracker_.started() ? 1.0 : measured_fraction(frame);
+  const double measured = tracker_.started() ? 1.0 : held_out ? 0.0 : measured_fraction(frame);
   if (measured < kMinSeedDepthFraction) {
     record.timestamp = frame.timestamp;
     record.tracked = false;
-    record.reason = "waiting for a first frame with depth: " + std::to_string(100 * measured) +
-                    "% of its pixels are measured";
+    record.held_out = held_out;
+    record.reason = held_out ? "a held-out frame before the first keyframe"
+                             : "waiting for a first frame with depth: " + std::to_string(100 * measured) +
+                                   "% of its pixels are measured";
     std::lock_guard lock(mutex_);
-    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false});
+    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false, held_out});
     record.gaussians = 0;
     return record;
   }
@@ -138,7 +140,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
       std::lock_guard lock(mutex_);
       return keyframe_world_[k];
     });
-    if (tracker_.wants_keyframe(record)) {
+    if (!held_out && tracker_.wants_keyframe(record)) {
       record.keyframe = true;
       tracker_.refine_keyframe(map, frame, record);
     }
@@ -170,7 +172,8 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame) {
   const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
   // Relative to the keyframe as known now (sequential: after mapping moved it).
   frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
-                     record.tracked, record.keyframe});
+                     record.tracked, record.keyframe, held_out});
+  record.held_out = held_out;
   record.gaussians = map_->size();
   return record;
 }

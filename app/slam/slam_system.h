@@ -51,8 +51,10 @@ class SlamSystem {
   SlamSystem& operator=(const SlamSystem&) = delete;
 
   // Tracks the frame (the first one defines the world frame and seeds the map, synchronously in
-  // either mode) and maps it when it becomes a keyframe. Rethrows an error of the mapping thread.
-  FrameRecord process(const splat::RgbdFrame& frame);
+  // either mode) and maps it when it becomes a keyframe. A `held_out` frame (a test view) is
+  // tracked for its pose but never maps, seeds, becomes a keyframe or joins the final sweep.
+  // Rethrows an error of the mapping thread.
+  FrameRecord process(const splat::RgbdFrame& frame, bool held_out = false);
   // Threaded: returns once no keyframe waits or is being mapped. Rethrows a mapping error.
   void wait_for_mapping();
   // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.
@@ -93,6 +95,7 @@ class SlamSystem {
     std::size_t keyframe;
     Eigen::Isometry3d T_keyframe_cam;
     bool tracked, is_keyframe;
+    bool held_out = false;
   };
   // Everything the system carries from one frame to the next, for checkpoints; the keyframes'
   // images excepted, which restore() loads again.

@@ -343,6 +343,33 @@ TEST(CliEval, UsesTheRunsRecordedDatasetAndIntrinsics) {
   EXPECT_NE(eval.output.find("ATE RMSE"), std::string::npos) << eval.output;
 }
 
+// --test-every: the held-out frames are tracked (a pose each) but never keyframes, and eval
+// scores them apart from the training views.
+TEST(CliEval, ScoresHeldOutViewsApart) {
+  TempDir dir;
+  write_quick_run_inputs(dir);
+  const std::string run = (dir / "run").string();
+  const std::string args = "reconstruct " + (dir / "seq").string() + " --out " + run + " --config " + (dir / "quick.json").string();
+  EXPECT_NE(run_gslam(args + " --test-every 1").exit_code, 0) << "every frame held out leaves nothing to map";
+  const RunResult made = run_gslam(args + " --test-every 3");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  std::ifstream summary_file(dir / "run" / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(summary_file);
+  EXPECT_EQ(summary.at("held_out_frames").get<int>(), 2);  // frames 2 and 5 of 6
+  EXPECT_EQ(summary.at("input").at("test_every").get<int>(), 3);
+  EXPECT_FALSE(std::filesystem::exists(dir / "run" / "keyframes" / "kf_0002.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "run" / "keyframes" / "kf_0005.png"));
+  EXPECT_EQ(summary.at("tracking_failures").get<int>(), 0);
+  const RunResult eval = run_gslam("eval " + run);
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("held-out views (2)"), std::string::npos) << eval.output;
+  std::ifstream eval_file(dir / "run" / "eval.json");
+  const nlohmann::json j = nlohmann::json::parse(eval_file);
+  EXPECT_EQ(j.at("held_out_rendering").at("frames").get<int>(), 2);
+  EXPECT_EQ(j.at("rendering").at("frames").get<int>(), 4);
+  EXPECT_GT(j.at("held_out_rendering").at("psnr_db").get<double>(), 15.0);
+}
+
 }  // namespace
 
 namespace {
