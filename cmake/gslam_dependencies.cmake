@@ -15,7 +15,7 @@ gslam_require_package(OpenEXR libopenexr-dev)
 gslam_require_package(TinyGLTF libtinygltf-dev)
 gslam_require_package(nlohmann_json nlohmann-json3-dev)
 # Image pyramids and gradients for the RGB-D odometry.
-gslam_require_package(OpenCV libopencv-dev COMPONENTS core imgproc)
+gslam_require_package(OpenCV libopencv-dev COMPONENTS core imgproc videoio)
 if(GSLAM_BUILD_TESTS)
   gslam_require_package(GTest libgtest-dev)
 endif()

@@ -8,6 +8,7 @@ packages=(
   libvulkan-dev glslang-tools mesa-vulkan-drivers
   libglfw3-dev libgl-dev libgl1-mesa-dri xvfb xauth
   clang libclang-rt-14-dev
+  ffmpeg
 )
 missing=()
 for p in "${packages[@]}"; do

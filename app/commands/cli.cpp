@@ -10,6 +10,7 @@
 #include "commands/live_command.h"
 #include "commands/reconstruct_command.h"
 #include "commands/render_command.h"
+#include "viewer/views.h"
 
 namespace app {
 namespace {
@@ -41,16 +42,22 @@ int run_cli(int argc, char** argv) {
   cli.require_subcommand(1);
 
   RenderOptions render;
-  CLI::App* render_cmd = cli.add_subcommand("render", "Render a map (.ply/.glb) along a trajectory or an orbit");
-  render_cmd->add_option("map", render.map, "Map file: .ply (3DGS) or .glb/.gltf (KHR_gaussian_splatting)")->required();
+  CLI::App* render_cmd = cli.add_subcommand(
+      "render", "Render a map (.ply/.glb, or a run folder) along a path near its cameras, at them, or on an orbit");
+  render_cmd->add_option("map", render.map, "Map file (.ply 3DGS, .glb/.gltf KHR_gaussian_splatting) or a reconstruct run folder")->required();
   render_cmd->add_option("--out", render.out, "Output directory")->required();
   auto* trajectory = render_cmd->add_option("--trajectory", render.trajectory, "TUM trajectory (camera to world)");
-  render_cmd->add_option("--intrinsics", render.intrinsics, "fx,fy,cx,cy,W,H for --trajectory")->needs(trajectory);
-  auto* orbit = render_cmd->add_option("--orbit", render.orbit, "Views on a turntable orbit")->capture_default_str();
-  render_cmd->add_option("--size", render.size, "Orbit image size WxH")->capture_default_str();
-  render_cmd->add_option("--up", render.up, "Orbit axis x,y,z")->capture_default_str();
+  render_cmd->add_option("--intrinsics", render.intrinsics, "fx,fy,cx,cy,W,H of the cameras");
+  render_cmd->add_option("--path", render.path, "Along camera poses: novel (a smooth path near them) or recorded (at them)")
+      ->check(CLI::IsMember({"novel", "recorded"}))->capture_default_str();
+  render_cmd->add_option("--views", render.views, "Views along a novel path (default: one per pose)")->check(CLI::Range(1, kMaxOrbitViews));
+  render_cmd->add_option("--offset", render.offset, "Novel path offset in each camera's axes, metres (right, down, forward)")->capture_default_str();
+  auto* orbit = render_cmd->add_option("--orbit", render.orbit, "Views on an orbit (default for a map without cameras: 36)");
+  render_cmd->add_option("--size", render.size, "Image size WxH where no camera is known")->capture_default_str();
+  render_cmd->add_option("--up", render.up, "Orbit axis x,y,z (default: the cameras' up, else 0,0,1)");
   trajectory->excludes(orbit);
-  render_cmd->add_option("--format", render.formats, "png, exr or png,exr")->capture_default_str();
+  render_cmd->add_option("--format", render.formats, "Comma-separated: png, exr, mp4 (H.264 video of the views)")->capture_default_str();
+  render_cmd->add_option("--fps", render.fps, "Frame rate of the mp4")->check(CLI::Range(1.0, 240.0))->capture_default_str();
   render_cmd->add_option("--background", render.background, "Background RGB r,g,b in [0, 1]")->capture_default_str();
   add_backend_options(*render_cmd, render.backend);
 

@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "commands/backend.h"
@@ -7,19 +8,27 @@
 namespace app {
 
 struct RenderOptions {
-  std::filesystem::path map;
+  std::filesystem::path map;         // a map file, or a run folder (its map, trajectory and camera)
   std::filesystem::path out;
-  std::filesystem::path trajectory;  // with intrinsics; otherwise an orbit
+  std::filesystem::path trajectory;  // with intrinsics: camera poses for the views
   std::string intrinsics;            // fx,fy,cx,cy,W,H
-  int orbit = 36;                    // views on the orbit
-  std::string size = "640x480";      // orbit image size
-  std::string up = "0,0,1";          // orbit axis
-  std::string formats = "png";       // comma-separated: png, exr
+  std::string path = "novel";        // views along poses: "novel" (near them) or "recorded" (at them)
+  int views = 0;                     // views along a novel path; 0: one per pose
+  std::string offset = "0.1,-0.05,0";  // novel path: metres in each camera's axes (right, down, forward)
+  std::optional<int> orbit;          // views on an orbit (the default, 36, for a map without poses)
+  std::string size = "640x480";      // orbit image size where no camera is known
+  std::optional<std::string> up;     // orbit axis; by default from the cameras, else 0,0,1
+  std::string formats = "png";       // comma-separated: png, exr, mp4
+  double fps = 30;                   // mp4
   std::string background = "0,0,0";  // RGB in [0, 1]
   BackendChoice backend;
 };
 
-// `gslam render`: renders a map along a trajectory or an orbit into DIR/view_NNNN.{png,exr}.
+// `gslam render`: renders a map into DIR/view_NNNN.{png,exr} and/or DIR/render.mp4:
+// - along camera poses (a run folder's trajectory, or --trajectory with --intrinsics): a smooth
+//   path near them by default (viewer/views.h novel_path), or the poses themselves;
+// - or on an orbit: about the centre at the cameras' height with their up where the map has
+//   poses, else at 2.5 map radii about --up.
 // Prints progress and a one-line summary; returns the process exit code. Throws splat::Error.
 int run_render(const RenderOptions& options);
 

@@ -1,5 +1,7 @@
 #include "viewer/views.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -89,30 +91,134 @@ Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& tar
   return T_world_cam;
 }
 
-std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
-                                         const Eigen::Vector3d& up_in) {
+namespace {
+
+void check_view_count(int n) {
   if (n < 1 || n > kMaxOrbitViews) {
     throw splat::Error("orbit: view count is " + std::to_string(n) + ", expected 1 to " + std::to_string(kMaxOrbitViews));
   }
-  if (!(up_in.norm() > 0)) throw splat::Error("orbit: the up vector is zero");
-  const Eigen::Vector3d up = up_in.normalized();
-  // Two axes spanning the orbit plane.
-  const Eigen::Vector3d a = up.unitOrthogonal();
-  const Eigen::Vector3d b = up.cross(a);
-  const double distance = 2.5 * extent.radius;
-  const double elevation = 25.0 * M_PI / 180.0;
-  const Intrinsics k{0.8 * width, 0.8 * width, width / 2.0, height / 2.0, width, height};
+}
+
+// n cameras on a circle about `center` in the plane normal to `up` (unit), at `radius` from the
+// axis and `height` along it, looking at the centre.
+std::vector<splat::Camera> circle_cameras(const Eigen::Vector3d& center, const Eigen::Vector3d& up, double radius,
+                                          double height, int n, const Intrinsics& k, double near) {
+  check_view_count(n);
+  const Eigen::Vector3d a = up.unitOrthogonal(), b = up.cross(a);  // the orbit plane
   std::vector<splat::Camera> cams;
   for (int i = 0; i < n; ++i) {
     const double angle = 2 * M_PI * i / n;
-    const Eigen::Vector3d dir = std::cos(elevation) * (std::cos(angle) * a + std::sin(angle) * b) +
-                                std::sin(elevation) * up;
-    const Eigen::Vector3d eye = extent.center + distance * dir;
-    splat::Camera cam = make_camera(k, look_at(eye, extent.center, up));
-    cam.near = std::max(1e-4, 0.01 * extent.radius);
+    const Eigen::Vector3d eye = center + radius * (std::cos(angle) * a + std::sin(angle) * b) + height * up;
+    splat::Camera cam = make_camera(k, look_at(eye, center, up));
+    cam.near = near;
     cams.push_back(cam);
   }
   return cams;
+}
+
+}  // namespace
+
+std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
+                                         const Eigen::Vector3d& up_in) {
+  check_view_count(n);
+  if (!(up_in.norm() > 0)) throw splat::Error("orbit: the up vector is zero");
+  const double distance = 2.5 * extent.radius, elevation = 25.0 * M_PI / 180.0;
+  const Intrinsics k{0.8 * width, 0.8 * width, width / 2.0, height / 2.0, width, height};
+  return circle_cameras(extent.center, up_in.normalized(), distance * std::cos(elevation), distance * std::sin(elevation),
+                        n, k, std::max(1e-4, 0.01 * extent.radius));
+}
+
+Eigen::Vector3d camera_up(const std::vector<Eigen::Isometry3d>& poses) {
+  Eigen::Vector3d image_up = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d rights = Eigen::Matrix3d::Zero();
+  for (const auto& T : poses) {
+    image_up -= T.linear().col(1);
+    rights += T.linear().col(0) * T.linear().col(0).transpose();
+  }
+  if (!(image_up.norm() > 1e-9)) throw splat::Error("the cameras agree on no up direction");
+  image_up.normalize();
+  // Hand-held and robot cameras rarely roll: their x axes lie in the horizontal plane, so up is
+  // the direction most normal to all of them. Where they all point one way (no turn), that
+  // leaves a plane: the image-up direction within it.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(rights);
+  const Eigen::Vector3d& values = solver.eigenvalues();
+  Eigen::Vector3d up;
+  if (values[1] > 0.05 * values[2]) {
+    up = solver.eigenvectors().col(0);
+  } else {
+    const Eigen::Vector3d right = solver.eigenvectors().col(2);
+    up = (image_up - image_up.dot(right) * right).normalized();
+  }
+  return up.dot(image_up) < 0 ? -up : up;
+}
+
+std::vector<splat::Camera> orbit_at_camera_height(const MapExtent& extent, const std::vector<Eigen::Isometry3d>& poses,
+                                                  int n, const Intrinsics& k) {
+  if (poses.empty()) throw splat::Error("orbit: no camera poses");
+  const Eigen::Vector3d up = camera_up(poses);
+  // The scene's centre: the point nearest every camera's line of sight (what they looked at),
+  // unless the lines are near parallel or meet far outside the map.
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const auto& T : poses) {
+    const Eigen::Vector3d d = T.linear().col(2);
+    const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - d * d.transpose();
+    normal += across;
+    rhs += across * T.translation();
+  }
+  Eigen::Vector3d center = extent.center;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> conditioning(normal);
+  if (conditioning.eigenvalues()[0] > 1e-3 * conditioning.eigenvalues()[2]) {
+    const Eigen::Vector3d looked_at = normal.ldlt().solve(rhs);
+    if ((looked_at - extent.center).norm() < 2 * extent.radius) center = looked_at;
+  }
+  double height = 0, radius = 0;
+  for (const auto& T : poses) {
+    const Eigen::Vector3d d = T.translation() - center;
+    height += d.dot(up);
+    radius += (d - d.dot(up) * up).norm();
+  }
+  height /= static_cast<double>(poses.size());
+  radius = std::max(radius / static_cast<double>(poses.size()), 0.1 * extent.radius);
+  return circle_cameras(center, up, radius, height, n, k, std::max(1e-4, 0.01 * extent.radius));
+}
+
+std::vector<Eigen::Isometry3d> novel_path(const std::vector<Eigen::Isometry3d>& poses, int views,
+                                          const Eigen::Vector3d& offset_cam, int half_window) {
+  check_view_count(views);
+  if (poses.empty()) throw splat::Error("path: no camera poses");
+  const int m = static_cast<int>(poses.size());
+  // Moving average: positions, and rotations as the normalized sum of sign-aligned quaternions.
+  std::vector<Eigen::Vector3d> position(poses.size());
+  std::vector<Eigen::Quaterniond> rotation(poses.size());
+  for (int i = 0; i < m; ++i) {
+    const Eigen::Quaterniond centre(poses[static_cast<std::size_t>(i)].linear());
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    Eigen::Vector4d q = Eigen::Vector4d::Zero();
+    int count = 0;
+    for (int j = std::max(0, i - half_window); j <= std::min(m - 1, i + half_window); ++j, ++count) {
+      const Eigen::Isometry3d& T = poses[static_cast<std::size_t>(j)];
+      p += T.translation();
+      Eigen::Quaterniond r(T.linear());
+      if (r.dot(centre) < 0) r.coeffs() *= -1;
+      q += r.coeffs();
+    }
+    position[static_cast<std::size_t>(i)] = p / count;
+    rotation[static_cast<std::size_t>(i)] = Eigen::Quaterniond(q.normalized());
+  }
+  std::vector<Eigen::Isometry3d> path;
+  for (int v = 0; v < views; ++v) {
+    // Half a step off the recorded poses, so that no view sits where a frame was taken.
+    const double s = views == 1 ? 0.5 * (m - 1) : (m - 1) * (v + 0.5) / views;
+    const std::size_t i = static_cast<std::size_t>(std::floor(s));
+    const std::size_t j = std::min(i + 1, poses.size() - 1);
+    const double t = s - static_cast<double>(i);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = rotation[i].slerp(t, rotation[j]).toRotationMatrix();
+    T.translation() = (1 - t) * position[i] + t * position[j] + T.linear() * offset_cam;
+    path.push_back(T);
+  }
+  return path;
 }
 
 }  // namespace app

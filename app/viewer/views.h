@@ -35,6 +35,21 @@ std::pair<int, int> parse_size(const std::string& text);
 std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int width, int height,
                                          const Eigen::Vector3d& up);
 
+// Views of a map that a run made, from the run's own camera poses (camera-to-world):
+// - camera_up: the world's up as the cameras saw it, the mean of their image-up axes (-y);
+// - orbit_at_camera_height: n views on a circle about the map's centre in the plane normal to
+//   that up, at the cameras' mean height along it and their mean distance from the centre,
+//   looking at the centre, with the run's intrinsics;
+// - novel_path: `views` poses along the recorded path, smoothed (a moving average over
+//   +-half_window poses), interpolated between the poses and moved by `offset_cam` (metres, in
+//   each camera's own axes: x right, y down, z forward), so that every view is one the camera
+//   did not take.
+Eigen::Vector3d camera_up(const std::vector<Eigen::Isometry3d>& poses);
+std::vector<splat::Camera> orbit_at_camera_height(const MapExtent& extent, const std::vector<Eigen::Isometry3d>& poses,
+                                                  int n, const Intrinsics& k);
+std::vector<Eigen::Isometry3d> novel_path(const std::vector<Eigen::Isometry3d>& poses, int views,
+                                          const Eigen::Vector3d& offset_cam, int half_window = 8);
+
 // Camera-to-world pose at `eye` looking at `target`, image y pointing against `up` (OpenCV axes).
 Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up);
 

@@ -27,6 +27,15 @@ splat::Gaussians small_map() {
   return gslam::test::make_random_scene<float>(o).gaussians;
 }
 
+// DIR/seq, a 6-frame synthetic sequence, and DIR/quick.json, a configuration that reconstructs
+// it in about a second.
+void write_quick_run_inputs(const TempDir& dir) {
+  app::SyntheticOptions o;
+  o.frames = 6;
+  app::write_synthetic_sequence(dir / "seq", o);
+  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 1, "mapping": {"iterations": 3}})");
+}
+
 TEST(CliRender, OrbitWritesPngAndExrAndSummary) {
   TempDir dir;
   app::write_ply(dir / "map.ply", small_map());
@@ -53,6 +62,43 @@ TEST(CliRender, TrajectoryWithIntrinsicsRendersOneViewPerPose) {
                                 " --trajectory " + (dir / "traj.txt").string() + " --intrinsics 60,60,32,24,64,48");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "view_0001.png"));
+}
+
+// A video of an orbit of the bundled demo map (a donut): H.264 with one frame per view, as
+// ffprobe (FFmpeg's own reader) decodes it; and a run folder renders along its cameras.
+TEST(CliRender, Mp4OfTheDonutOrbitDecodesWithEveryView) {
+  if (!gslam::test::program_available("ffprobe")) GTEST_SKIP() << "ffprobe not found (apt-get install ffmpeg)";
+  TempDir dir;
+  const RunResult r = run_gslam("render " + std::string(GSLAM_SOURCE_DIR) + "/assets/demo_map.ply --out " + (dir / "out").string() +
+                                " --orbit 12 --size 160x120 --format mp4 --backend cpu");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "view_0000.png")) << "mp4 alone writes no frames";
+  const RunResult probe = gslam::test::run_command(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=codec_name,width,height,nb_read_frames -of csv=p=0 " +
+      (dir / "out" / "render.mp4").string());
+  ASSERT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_NE(probe.output.find("h264,160,120,12"), std::string::npos) << probe.output;
+  const RunResult odd = run_gslam("render " + std::string(GSLAM_SOURCE_DIR) + "/assets/demo_map.ply --out " + (dir / "odd").string() +
+                                  " --orbit 2 --size 161x120 --format mp4");
+  EXPECT_NE(odd.exit_code, 0);
+  EXPECT_NE(odd.output.find("even width and height"), std::string::npos) << odd.output;
+}
+
+TEST(CliRender, RunFolderRendersAlongItsCameras) {
+  TempDir dir;
+  write_quick_run_inputs(dir);
+  ASSERT_EQ(run_gslam("reconstruct " + (dir / "seq").string() + " --out " + (dir / "run").string() + " --config " +
+                      (dir / "quick.json").string()).exit_code, 0);
+  const RunResult path = run_gslam("render " + (dir / "run").string() + " --out " + (dir / "path").string() + " --views 5");
+  ASSERT_EQ(path.exit_code, 0) << path.output;
+  EXPECT_NE(path.output.find("rendered 5 views"), std::string::npos) << path.output;
+  EXPECT_NE(path.output.find("at 320x240"), std::string::npos) << "the run's own camera: " << path.output;
+  const RunResult orbit = run_gslam("render " + (dir / "run").string() + " --out " + (dir / "orbit").string() + " --orbit 3");
+  ASSERT_EQ(orbit.exit_code, 0) << orbit.output;
+  const splat::Image8 view = app::read_png_rgb8(dir / "orbit" / "view_0000.png");
+  int lit = 0;
+  for (unsigned char v : view.data) lit += v > 10;
+  EXPECT_GT(lit, static_cast<int>(view.data.size() / 4)) << "the orbit looks at the scene";
 }
 
 struct BadCase {
@@ -278,14 +324,6 @@ TEST(CliReconstruct, ResumeAfterCtrlCEndsAsTheUninterruptedRun) {
 
 namespace {
 
-// DIR/seq, a 6-frame synthetic sequence, and DIR/quick.json, a configuration that reconstructs
-// it in about a second.
-void write_quick_run_inputs(const TempDir& dir) {
-  app::SyntheticOptions o;
-  o.frames = 6;
-  app::write_synthetic_sequence(dir / "seq", o);
-  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 1, "mapping": {"iterations": 3}})");
-}
 
 // A run folder holds one run: a second run refuses it unless --overwrite, which clears the first
 // run's files (and a killed run's temporaries); eval refuses a folder whose files mix runs.
