@@ -162,8 +162,12 @@ int run_eval(const EvalOptions& o) {
   const char* axis_names[3] = {"x", "y", "z"};
   top.labels(std::string(axis_names[a]) + " (m)", std::string(axis_names[b]) + " (m)");
   top.title("top view, estimate aligned to ground truth");
-  top.add(gx, gy, {0, 0, 0}, "ground truth");
-  top.add(ex, ey, {220, 30, 30}, "estimate");
+  top.add(gx, gy, {150, 150, 150}, "ground truth");
+  std::vector<double> error_cm;
+  for (double e : errors.ate_errors) error_cm.push_back(100 * e);
+  top.add_coloured(ex, ey, error_cm, "estimate, error (cm)");
+  top.mark(gx.front(), gy.front(), {40, 180, 60}, "start");
+  top.mark(gx.back(), gy.back(), {220, 30, 30}, "end");
   write_png_rgb8(o.run / "trajectory_top.png", top.render());
   LinePlot curve(800, 300);
   std::vector<double> t, e;

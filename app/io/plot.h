@@ -7,15 +7,22 @@
 
 namespace app {
 
-// A line plot rendered into an RGB image: axes scaled to the data, ticks at round values with
-// their numbers, axis titles, polylines in given colours and an optional legend. Enough for
-// trajectories and error curves.
+// A line plot rendered into an RGB image: axes scaled to the data with a margin around it,
+// ticks at round values with their numbers, axis titles, polylines in given colours or
+// coloured by a value along them (with a colour bar), labelled markers and a legend. Enough
+// for trajectories and error curves.
 class LinePlot {
  public:
   LinePlot(int width, int height);
   // Adds a polyline (x[i], y[i]) in an RGB colour; a non-empty name goes into the legend.
   void add(const std::vector<double>& x, const std::vector<double>& y, std::array<uint8_t, 3> color,
            std::string name = {});
+  // A polyline coloured by value[i] along it (blue at the lowest, red at the highest), with a
+  // colour bar naming `name` and the range.
+  void add_coloured(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& value,
+                    std::string name);
+  // A filled square marker at (x, y) with a label beside it (start and end of a trajectory).
+  void mark(double x, double y, std::array<uint8_t, 3> color, std::string label);
   // Keeps one unit the same length on both axes (for top views).
   void equal_axes(bool equal) { equal_ = equal; }
   void labels(std::string x_label, std::string y_label) {
@@ -30,12 +37,22 @@ class LinePlot {
     std::vector<double> x, y;
     std::array<uint8_t, 3> color;
     std::string name;
+    std::vector<double> value;  // add_coloured: a value per point
+  };
+  struct Marker {
+    double x, y;
+    std::array<uint8_t, 3> color;
+    std::string label;
   };
   int width_, height_;
   bool equal_ = false;
   std::string x_label_, y_label_, title_;
   std::vector<Series> series_;
+  std::vector<Marker> markers_;
 };
+
+// The colour of t in [0, 1] on the plots' scale: blue, cyan, green, yellow, red.
+std::array<uint8_t, 3> scale_color(double t);
 
 // Round tick values (1, 2 or 5 times a power of ten apart) covering [lo, hi], about `count`.
 std::vector<double> nice_ticks(double lo, double hi, int count);

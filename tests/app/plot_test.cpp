@@ -43,3 +43,28 @@ TEST(LinePlot, DrawsTheSeriesInsideTheAxesAndTextInTheMargins) {
 }
 
 }  // namespace
+
+namespace {
+
+// Data never touches the frame of the axes; a coloured series runs from the scale's blue to its
+// red; markers land on their points.
+TEST(LinePlot, KeepsAMarginAndColoursBySeriesValueAndMarksPoints) {
+  app::LinePlot plot(400, 300);
+  plot.add_coloured({0, 1, 2, 3}, {0, 1, 2, 3}, {0, 1, 2, 3}, "error");
+  plot.mark(0, 0, {10, 200, 10}, "start");
+  const splat::Image8 img = plot.render();
+  const std::array<uint8_t, 3> blue = app::scale_color(0), red = app::scale_color(1);
+  EXPECT_EQ(blue, (std::array<uint8_t, 3>{40, 60, 220}));
+  EXPECT_EQ(red, (std::array<uint8_t, 3>{220, 30, 30}));
+  // The plot area is x in [80, 380), y in [24, 244); 4% margins keep the line off its edges.
+  EXPECT_EQ(count(img, 80, 24, 88, 244, app::scale_color(1.0 / 6)), 0);
+  int plotted = 0;
+  for (int k = 0; k <= 20; ++k) plotted += count(img, 90, 30, 372, 238, app::scale_color(k / 20.0));
+  EXPECT_GT(plotted, 150) << "the series, in the scale's colours";
+  EXPECT_EQ(count(img, 370, 24, 380, 30, red), 0) << "no data in the top-right corner margin";
+  // The start marker: its colour where (0, 0) lands, 4% in from the bottom-left corner.
+  const int x = 80 + static_cast<int>(0.04 / 1.08 * 300), y = 244 - static_cast<int>(0.04 / 1.08 * 220);
+  EXPECT_GT(count(img, x - 5, y - 5, x + 6, y + 6, {10, 200, 10}), 40);
+}
+
+}  // namespace
