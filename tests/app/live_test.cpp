@@ -141,7 +141,7 @@ TEST(CliLive, CtrlCWritesCompleteOutputs) {
   // Replayed at a tenth of its rate, the run is still going when SIGINT arrives after 4 s.
   const auto r = gslam::test::run_command(
       "timeout --preserve-status -s INT 4 " + std::string(GSLAM_BINARY) + " live " + seq.string() +
-      " --out " + (dir / "run").string() + " --headless --speed 0.1");
+      " --out " + (dir / "run").string() + " --headless" + gslam::test::replay_speed(0.1));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json s = read_json(dir / "run" / "summary.json");
   EXPECT_TRUE(s.at("complete").get<bool>());
@@ -164,8 +164,8 @@ TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
   std::ofstream(dir / "light.json") << R"({"mapping": {"iterations": 10}})";
   const std::string backend =
       splat::vulkan_backend_built()
-          ? " --backend vulkan --speed 0.05 --config " + (dir / "light.json").string()
-          : " --speed 0.25";
+          ? " --backend vulkan" + gslam::test::replay_speed(0.05) + " --config " + (dir / "light.json").string()
+          : gslam::test::replay_speed(0.25);
   // Under AddressSanitizer, leak checking is off for this process only: Mesa's GLX driver,
   // unloaded by glfwTerminate, leaves 112 bytes that LeakSanitizer can no longer attribute
   // (seen in `scripts/test.sh --sanitize`); memory errors are still checked.
@@ -198,7 +198,7 @@ TEST(CliLive, GivesReconstructsTrajectoryWhenNoFrameIsDropped) {
   const std::string config = " --config " + (dir / "config.json").string();
   const auto offline = run_gslam("reconstruct " + seq.string() + " --out " + (dir / "offline").string() + config);
   ASSERT_EQ(offline.exit_code, 0) << offline.output;
-  const auto live = run_gslam("live " + seq.string() + " --out " + (dir / "live").string() + " --headless --speed 0.25" + config);
+  const auto live = run_gslam("live " + seq.string() + " --out " + (dir / "live").string() + " --headless" + gslam::test::replay_speed(0.25) + config);
   ASSERT_EQ(live.exit_code, 0) << live.output;
   ASSERT_EQ(read_json(dir / "live" / "summary.json").at("live").at("frames_dropped").get<int>(), 0)
       << "7.5 Hz should leave time for every frame";

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 
 namespace gslam::test {
 
@@ -20,6 +21,19 @@ RunResult run_command(const std::string& command) {
 
 bool program_available(const std::string& name) {
   return run_command("command -v " + name + " >/dev/null").exit_code == 0;
+}
+
+double test_time_scale() {
+  const char* text = std::getenv("GSLAM_TEST_TIME_SCALE");
+  if (text == nullptr) return 1;
+  const double scale = std::atof(text);
+  return scale >= 1 ? scale : 1;
+}
+
+std::string replay_speed(double speed) {
+  char text[64];
+  std::snprintf(text, sizeof text, " --speed %.6g", speed / test_time_scale());
+  return text;
 }
 
 }  // namespace gslam::test

@@ -14,4 +14,11 @@ RunResult run_command(const std::string& command);
 // Whether a program is on PATH.
 bool program_available(const std::string& name);
 
+// How much slower than a plain build this one runs (GSLAM_TEST_TIME_SCALE, default 1; the
+// sanitized build sets it), for tests that replay a camera in real time: they replay that much
+// slower, so that what they assert holds at the same load. The command-line form of a replay
+// speed scaled by it.
+double test_time_scale();
+std::string replay_speed(double speed);
+
 }  // namespace gslam::test
