@@ -16,6 +16,9 @@ fi
 ctest --test-dir "${GSLAM_BUILD_DIR:-build}" --output-on-failure --timeout "$timeout_s" -j "$(nproc)"
 if [ "${1:-}" = "--sanitize" ]; then exit 0; fi
 
+# arm64 (Jetson class): the rasterizer cross-built with a portable -march, its tests under qemu.
+scripts/cross_test_arm64.sh
+
 # Hostile input: every reader's libFuzzer target (clang, ASan + UBSan), then the whole suite in
 # that same sanitized build (coverage instrumentation is on the readers' libraries alone there).
 # Tests that replay a camera in real time replay 8x slower (GSLAM_TEST_TIME_SCALE).
