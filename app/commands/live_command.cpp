@@ -106,7 +106,7 @@ int run_live(const LiveOptions& o) {
     const std::shared_ptr<const splat::Gaussians> map = live.map();
     if (!map) return;  // no frame yet
     outputs.update_poses(live.trajectory());
-    outputs.set_mapping(live.mapping_totals());
+    outputs.set_mapping(live.mapping_totals(), live.loop_events());
     outputs.checkpoint(*map, live.keyframes(), true);
   };
   auto pipeline = [&] {
@@ -236,7 +236,7 @@ int run_live(const LiveOptions& o) {
 
   const MappingTotals mapping = live.mapping_totals();
   outputs.update_poses(live.trajectory());
-  outputs.set_mapping(mapping);
+  outputs.set_mapping(mapping, live.loop_events());
   outputs.extra()["live"] = {{"source", source->describe()},
                              {"frames_received", source->delivered() + source->dropped()},
                              {"frames_dropped", source->dropped() + paused_dropped},

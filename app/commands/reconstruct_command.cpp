@@ -115,6 +115,7 @@ int run_reconstruct(const ReconstructOptions& o) {
   Progress progress("reconstruct", dataset.entries.size(), "frames");
   progress.resume_at(first);
   const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
+  std::size_t loops_reported = slam.loop_events().size();
   for (std::size_t i = first; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
     const auto load_start = std::chrono::steady_clock::now();
     const splat::RgbdFrame frame = dataset.load(i);
@@ -122,6 +123,8 @@ int run_reconstruct(const ReconstructOptions& o) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
     const FrameRecord record = slam.process(frame, is_held_out(i, plan.test_every));
     if (!record.tracked) std::fprintf(stderr, "\nframe %zu: tracking failed (%s)\n", i, record.reason.c_str());
+    const std::vector<LoopEvent> loops = slam.loop_events();
+    for (; loops_reported < loops.size(); ++loops_reported) std::fprintf(stderr, "\n%s\n", describe(loops[loops_reported]).c_str());
     outputs.add(record, loading_ms);
     progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes()) + " keyframes");
     if ((i + 1) % every == 0) {
@@ -155,7 +158,7 @@ int run_reconstruct(const ReconstructOptions& o) {
                  refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
-  outputs.set_mapping(slam.mapping_totals());
+  outputs.set_mapping(slam.mapping_totals(), slam.loop_events());
   outputs.extra()["interrupted"] = InterruptGuard::interrupted();
   if (InterruptGuard::interrupted()) std::fprintf(stderr, "interrupted: writing what was done\n");
   std::vector<StampedPose> truth;

@@ -115,7 +115,23 @@ void RunOutputs::update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam)
   }
 }
 
-void RunOutputs::set_mapping(const MappingTotals& t) {
+std::string describe(const LoopEvent& loop) {
+  char text[160];
+  std::snprintf(text, sizeof text, "loop: frame %zu -> frame %zu, %d inliers, drift %.1f cm / %.1f deg: %s", loop.frame,
+                loop.matched_frame, loop.inliers, 100 * loop.drift_m, loop.drift_deg,
+                loop.accepted ? "accepted" : "rejected");
+  return text;
+}
+
+void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent>& loops) {
+  nlohmann::json events = nlohmann::json::array();
+  std::size_t accepted = 0;
+  for (const LoopEvent& e : loops) {
+    accepted += e.accepted;
+    events.push_back({{"frame", e.frame}, {"matched_frame", e.matched_frame}, {"inliers", e.inliers},
+                      {"drift_m", e.drift_m}, {"drift_deg", e.drift_deg}, {"accepted", e.accepted}});
+  }
+  extra_["loops"] = {{"accepted", accepted}, {"rejected", loops.size() - accepted}, {"events", events}};
   extra_["mapping"] = {{"keyframes_mapped", t.keyframes_mapped},   {"keyframes_skipped", t.keyframes_skipped},
                        {"gaussians_added", t.gaussians_added},     {"gaussians_pruned", t.gaussians_pruned},
                        {"iterations", t.iterations},               {"last_loss", t.last_loss},

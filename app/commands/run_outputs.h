@@ -18,6 +18,10 @@
 
 namespace app {
 
+// One line for the progress output: "loop: frame 412 -> frame 37, 88 inliers, drift 4.1 cm /
+// 1.2 deg: accepted".
+std::string describe(const LoopEvent& loop);
+
 class RunOutputs {
  public:
   // Prepares `out` for this run (io/run_folder.h: refuses another run's outputs unless
@@ -34,8 +38,8 @@ class RunOutputs {
   void add(const FrameRecord& record, double loading_ms);
   // Replaces the recorded poses (one per frame added, in order) with later estimates.
   void update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam);
-  // What mapping did (summary.json "mapping").
-  void set_mapping(const MappingTotals& totals);
+  // What mapping did (summary.json "mapping") and every loop it verified ("loops").
+  void set_mapping(const MappingTotals& totals, const std::vector<LoopEvent>& loops);
   // Extra summary fields (live mode: dropped frames, latency percentiles).
   nlohmann::json& extra() { return extra_; }
   // Writes trajectory.txt and summary.json (complete: false), and map.ply when `with_map`.

@@ -121,10 +121,25 @@ Eigen::Isometry3d arc_pose(double s) {
   return pose;
 }
 
-// The arc at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
+// `laps` turns of a 1.7 m circle about the room's middle at s in [0, 1], looking across the
+// room past its middle (the objects, then the far wall), bobbing so that the laps differ a little.
+Eigen::Isometry3d lap_pose(double s, int laps) {
+  const double angle = 2 * M_PI * laps * s;
+  const Vector3d eye(1.7 * std::sin(angle), -0.2 + 0.1 * std::sin(5 * angle), -1.7 * std::cos(angle));
+  const Vector3d target(0.4 * std::cos(angle), 0.9, 0.4 * std::sin(angle));
+  const Vector3d z = (target - eye).normalized();
+  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() << x, z.cross(x), z;
+  pose.translation() = eye;
+  return pose;
+}
+
+// The path at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
 Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {
   const double duration = (o.frames - 1) / o.fps;
-  const Eigen::Isometry3d arc = arc_pose(duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0);
+  const double s = duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0;
+  const Eigen::Isometry3d arc = o.laps > 0 ? lap_pose(s, o.laps) : arc_pose(s);
   if (o.shake_peak_rate <= 0) return arc;
   constexpr double kShakeHz = 1.5;
   const double yaw = o.shake_peak_rate / (2 * M_PI * kShakeHz) * std::sin(2 * M_PI * kShakeHz * seconds);
@@ -228,7 +243,8 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   write_text(dir / "rgb.txt", rgb_list);
   write_text(dir / "depth.txt", depth_list);
   char intrinsics[128];
-  std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", o.focal, o.focal, cx, cy);
+  const double stated = o.focal * (1 + o.focal_error);
+  std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", stated, stated, cx, cy);
   write_text(dir / "intrinsics.txt", intrinsics);
   write_tum_trajectory(dir / "groundtruth.txt", truth);
 }

@@ -8,7 +8,13 @@ struct SyntheticOptions {
   int frames = 60;
   int width = 320, height = 240;
   double focal = 260;     // pixels; principal point at the image centre
+  // A calibration error: intrinsics.txt says focal * (1 + focal_error), the images use focal.
+  // Odometry then drifts as it does on real cameras, systematically.
+  double focal_error = 0;
   double fps = 30;
+  // 0: an arc through the room. N > 0: N laps of a circle about the room's middle, looking across
+  // it, so the camera returns to where it began (loop closure's test).
+  int laps = 0;
   // Hard cases. A yaw oscillation on top of the arc, peaking at this rate (rad/s, at 1.5 Hz).
   double shake_peak_rate = 0;
   // Motion blur: colour averaged over this exposure (seconds) in blur_samples instants.

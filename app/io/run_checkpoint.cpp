@@ -104,6 +104,47 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
   return frames;
 }
 
+json edges_to_json(const std::vector<tracking::PoseGraphEdge>& edges) {
+  json j = json::array();
+  for (const auto& e : edges) {
+    j.push_back({{"i", e.i}, {"j", e.j}, {"T_i_j", pose_to_json(e.T_i_j)},
+                 {"information", vector_to_json(e.information.data(), 36)}, {"loop", e.loop}});
+  }
+  return j;
+}
+
+std::vector<tracking::PoseGraphEdge> edges_from_json(const json& j) {
+  std::vector<tracking::PoseGraphEdge> edges;
+  for (const json& e : j.get_ref<const json::array_t&>()) {
+    tracking::PoseGraphEdge edge;
+    edge.i = e.at("i").get<std::size_t>();
+    edge.j = e.at("j").get<std::size_t>();
+    edge.T_i_j = pose_from_json(e.at("T_i_j"));
+    vector_from_json<36>(e.at("information"), edge.information.data());
+    edge.loop = e.at("loop").get<bool>();
+    edges.push_back(edge);
+  }
+  return edges;
+}
+
+json loop_events_to_json(const std::vector<LoopEvent>& events) {
+  json j = json::array();
+  for (const auto& e : events) {
+    j.push_back({{"frame", e.frame}, {"matched_frame", e.matched_frame}, {"inliers", e.inliers},
+                 {"drift_m", e.drift_m}, {"drift_deg", e.drift_deg}, {"accepted", e.accepted}});
+  }
+  return j;
+}
+
+std::vector<LoopEvent> loop_events_from_json(const json& j) {
+  std::vector<LoopEvent> events;
+  for (const json& e : j.get_ref<const json::array_t&>()) {
+    events.push_back({e.at("frame").get<std::size_t>(), e.at("matched_frame").get<std::size_t>(), e.at("inliers").get<int>(),
+                      e.at("drift_m").get<double>(), e.at("drift_deg").get<double>(), e.at("accepted").get<bool>()});
+  }
+  return events;
+}
+
 json totals_to_json(const MappingTotals& t) {
   return {{"keyframes_mapped", t.keyframes_mapped}, {"keyframes_skipped", t.keyframes_skipped},
           {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
@@ -125,6 +166,7 @@ void for_each_array(State& s, Visit visit) {
   for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.adam.m, g));
   for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.adam.v, g));
   visit(s.mapper.adam.steps);
+  visit(s.mapper.anchors);
 }
 
 // Reads exactly the bytes the file has, never more than remain.
@@ -179,7 +221,10 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                        {"mapper_keyframes", s.mapper_keyframes},
                        {"keyframe_world", poses_to_json(s.keyframe_world)},
                        {"frames", frames_to_json(s.frames)},
-                       {"totals", totals_to_json(s.totals)}};
+                       {"totals", totals_to_json(s.totals)},
+                       {"edges", edges_to_json(s.edges)},
+                       {"loop_events", loop_events_to_json(s.loop_events)},
+                       {"tracker_correction", pose_to_json(s.tracker_correction)}};
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
@@ -217,6 +262,9 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     c.slam.keyframe_world = poses_from_json(header.at("keyframe_world"));
     c.slam.frames = frames_from_json(header.at("frames"));
     c.slam.totals = totals_from_json(header.at("totals"));
+    c.slam.edges = edges_from_json(header.at("edges"));
+    c.slam.loop_events = loop_events_from_json(header.at("loop_events"));
+    c.slam.tracker_correction = pose_from_json(header.at("tracker_correction"));
   } catch (const json::exception& e) {
     fail(path, std::string("malformed checkpoint header: ") + e.what());
   } catch (const splat::Error& e) {

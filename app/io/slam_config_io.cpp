@@ -38,6 +38,23 @@ std::vector<Field> fields(SlamConfig& c) {
       {"", "refine_densify_passes", &c.refine_densify_passes},
       {"", "refine_cache_mib", &c.refine_cache_mib},
       {"", "relocalize_iterations", &c.relocalize_iterations},
+      {"loop_closure", "enabled", &c.loop_closure.enabled},
+      {"loop_closure", "min_separation", &c.loop_closure.min_separation},
+      {"loop_closure", "dense_width", &c.loop_closure.dense_width},
+      {"loop_closure", "features", &c.loop_closure.places.features},
+      {"loop_closure", "max_hamming", &c.loop_closure.places.max_hamming},
+      {"loop_closure", "ratio", &c.loop_closure.places.ratio},
+      {"loop_closure", "min_matches", &c.loop_closure.places.min_matches},
+      {"loop_closure", "min_inliers", &c.loop_closure.places.min_inliers},
+      {"loop_closure", "inlier_distance", &c.loop_closure.places.inlier_distance},
+      {"loop_closure", "ransac_iterations", &c.loop_closure.places.ransac_iterations},
+      {"loop_closure", "candidates", &c.loop_closure.places.candidates},
+      {"loop_closure", "max_iterations", &c.loop_closure.graph.max_iterations},
+      {"loop_closure", "loop_huber_sigmas", &c.loop_closure.graph.loop_huber_sigmas},
+      {"loop_closure", "drift_per_metre", &c.loop_closure.graph.drift_per_metre},
+      {"loop_closure", "drift_deg_per_metre", &c.loop_closure.graph.drift_deg_per_metre},
+      {"loop_closure", "drift_floor_m", &c.loop_closure.graph.drift_floor_m},
+      {"loop_closure", "drift_floor_deg", &c.loop_closure.graph.drift_floor_deg},
       {"odometry", "iterations", &o.iterations},
       {"odometry", "finest_width", &o.finest_width},
       {"odometry", "max_points", &o.max_points},
@@ -160,7 +177,7 @@ void read_field(const Field& f, const nlohmann::json& v) {
 
 void read_section(const nlohmann::json& object, const std::string& section, const std::vector<Field>& table) {
   for (const auto& [key, value] : object.items()) {
-    if (section.empty() && (key == "odometry" || key == "tracking" || key == "mapping")) {
+    if (section.empty() && (key == "odometry" || key == "tracking" || key == "mapping" || key == "loop_closure")) {
       if (!value.is_object()) type_error(key, "an object of settings", value);
       read_section(value, key, table);
       continue;

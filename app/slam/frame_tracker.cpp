@@ -64,6 +64,8 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   record.tracked = r.converged;
   record.reason = r.reason;
   record.overlap = r.overlap;
+  record.reference = reference.keyframe;
+  record.information = r.information;
   return r.converged;
 }
 
@@ -135,6 +137,11 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   if (config_.front_end != "odometry") return;
   references_.push_front({last_prepared_, number});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
+}
+
+void FrameTracker::correct(const Eigen::Isometry3d& world_correction) {
+  for (Eigen::Isometry3d& T : last_poses_) T = splat::orthonormalized(world_correction * T);
+  last_keyframe_ = splat::orthonormalized(world_correction * last_keyframe_);
 }
 
 FrameTracker::State FrameTracker::state() const {

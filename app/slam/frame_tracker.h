@@ -31,6 +31,11 @@ struct FrameRecord {
   bool held_out = false;  // a test view: tracked, never mapped
   int renders = 0;      // rasterizer forward passes spent on tracking
   double overlap = 1;   // odometry: fraction of the reference's points this frame sees
+  // Odometry: the reference keyframe the pose was measured against, and the information of that
+  // measurement (tracking::OdometryResult::information), for the pose graph.
+  static constexpr std::size_t kNoReference = static_cast<std::size_t>(-1);
+  std::size_t reference = kNoReference;
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   double tracking_ms = 0, mapping_ms = 0;
   std::size_t gaussians = 0;  // in the map after this frame
 };
@@ -53,6 +58,8 @@ class FrameTracker {
   // through the rasterizer against the map, from the odometry's estimate.
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
+  // The world moved under tracking (a loop closed): the motion model's poses move with it.
+  void correct(const Eigen::Isometry3d& world_correction);
 
   // What tracking carries from one frame to the next, for checkpoints (between frames).
   struct State {

@@ -4,10 +4,27 @@
 #include <string>
 
 #include "mapping/mapper.h"
+#include "tracking/place_recognition.h"
+#include "tracking/pose_graph.h"
 #include "tracking/rgbd_odometry.h"
 #include "tracking/tracker.h"
 
 namespace app {
+
+// Loop closure (odometry front end): every mapped keyframe is matched against the keyframes at
+// least `min_separation` keyframes older (tracking/place_recognition.h); a verified match
+// becomes a loop edge of the keyframe pose graph (tracking/pose_graph.h), which is solved, and
+// keyframes, their frames and the Gaussians anchored to them move to the solution.
+struct LoopClosureConfig {
+  bool enabled = true;
+  int min_separation = 15;
+  // A place match is then refined by dense RGB-D alignment of the two keyframes at this width
+  // (each mapped keyframe is kept at it: 300 KiB), which must converge for the loop to count:
+  // RANSAC on a few dozen features is off by centimetres, the dense alignment by millimetres.
+  int dense_width = 160;
+  tracking::PlaceRecognitionConfig places;
+  tracking::PoseGraphConfig graph;
+};
 
 struct SlamConfig {
   // How frames are tracked: "odometry" (dense RGB-D alignment against the reference keyframe,
@@ -49,6 +66,7 @@ struct SlamConfig {
   // pose, with this many Levenberg-Marquardt iterations at the finest tracking level (0: off,
   // as it cost 0.2 frames/s on teddy for a worse ATE).
   int relocalize_iterations = 0;
+  LoopClosureConfig loop_closure;
 
   // Throws splat::Error naming the first field out of range ("mapping.window: expected an
   // integer >= 1, got 0"), tracking and mapping fields included.

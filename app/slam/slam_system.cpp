@@ -1,5 +1,6 @@
 #include "slam/slam_system.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -11,6 +12,7 @@
 
 #include "slam/elapsed.h"
 #include "splat/error.h"
+#include "splat/se3.h"
 
 namespace app {
 
@@ -19,7 +21,8 @@ SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
       tracking_rasterizer_(rasterizer),
       tracker_(rasterizer, config_),
       mapper_(rasterizer, config_.mapping),
-      threaded_(false) {}
+      threaded_(false),
+      places_(config_.loop_closure.places) {}
 
 SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer& mapping_rasterizer,
                        const SlamConfig& config)
@@ -27,7 +30,8 @@ SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer
       tracking_rasterizer_(tracking_rasterizer),
       tracker_(tracking_rasterizer, config_),
       mapper_(mapping_rasterizer, config_.mapping),
-      threaded_(true) {
+      threaded_(true),
+      places_(config_.loop_closure.places) {
   if (&tracking_rasterizer == &mapping_rasterizer) {
     throw splat::Error("SlamSystem: threaded mapping needs a rasterizer of its own, got the tracking one");
   }
@@ -71,6 +75,106 @@ MappingTotals SlamSystem::mapping_totals() const {
   return totals_;
 }
 
+std::vector<LoopEvent> SlamSystem::loop_events() const {
+  std::lock_guard lock(mutex_);
+  return loop_events_;
+}
+
+std::size_t SlamSystem::frame_of_keyframe(std::size_t keyframe) const {
+  std::size_t seen = 0;
+  for (std::size_t i = 0; i < frames_.size(); ++i) {
+    if (frames_[i].is_keyframe && seen++ == keyframe) return i;
+  }
+  return frames_.size();  // the keyframe being processed: its frame is the next one
+}
+
+void SlamSystem::apply_tracker_correction() {
+  Eigen::Isometry3d correction;
+  {
+    std::lock_guard lock(mutex_);
+    correction = tracker_correction_;
+    tracker_correction_ = Eigen::Isometry3d::Identity();
+  }
+  tracker_.correct(correction);
+}
+
+namespace {
+
+// The information of an odometry edge, made positive definite: a direction the alignment could
+// not observe (a flat wall's slide) gets a vanishing weight rather than none.
+Eigen::Matrix<double, 6, 6> edge_information(const Eigen::Matrix<double, 6, 6>& information) {
+  const double scale = std::max(information.trace() / 6, 1.0);
+  return 0.5 * (information + information.transpose()) + 1e-9 * scale * Eigen::Matrix<double, 6, 6>::Identity();
+}
+
+}  // namespace
+
+splat::RgbdFrame SlamSystem::thumbnail(const splat::RgbdFrame& frame) const {
+  const int factor = std::max(1, frame.width() / config_.loop_closure.dense_width);
+  return splat::downsample(frame, factor);
+}
+
+void SlamSystem::close_loops(const KeyframeJob& job) {
+  const LoopClosureConfig& lc = config_.loop_closure;
+  tracking::PlaceFeatures features = tracking::extract_place_features(job.frame, lc.places);
+  const std::size_t separation = static_cast<std::size_t>(lc.min_separation);
+  const std::vector<tracking::PlaceMatch> matches =
+      places_.query(features, [&](std::size_t k) { return k + separation <= job.keyframe; });
+  places_.add(job.keyframe, std::move(features));
+  thumbnails_.emplace_back(job.keyframe, thumbnail(job.frame));
+  if (matches.empty()) return;
+  const tracking::PlaceMatch& m = matches.front();
+  // Dense alignment of the two keyframes from the RANSAC estimate.
+  const auto matched = std::find_if(thumbnails_.begin(), thumbnails_.end(), [&](const auto& t) { return t.first == m.keyframe; });
+  if (matched == thumbnails_.end()) return;
+  tracking::OdometryConfig dense = config_.odometry;
+  dense.finest_width = matched->second.width();
+  const tracking::OdometryFrame reference(matched->second, dense), current(thumbnails_.back().second, dense);
+  const tracking::OdometryResult aligned = tracking::align_rgbd(reference, current, m.T_keyframe_query.inverse(), dense);
+  tracking::PoseGraphEdge loop;
+  loop.i = m.keyframe, loop.j = job.keyframe, loop.loop = true;
+  loop.T_i_j = aligned.T_cur_ref.inverse();
+  loop.information = edge_information(aligned.information);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<tracking::PoseGraphEdge> edges;
+  LoopEvent event;
+  {
+    std::lock_guard lock(mutex_);
+    poses = keyframe_world_;
+    edges = edges_;
+    event.frame = frame_of_keyframe(job.keyframe);
+    event.matched_frame = frame_of_keyframe(m.keyframe);
+  }
+  edges.push_back(loop);
+  const Eigen::Isometry3d revealed = (poses[loop.i].inverse() * poses[loop.j]).inverse() * loop.T_i_j;
+  event.inliers = m.inliers;
+  event.drift_m = revealed.translation().norm();
+  event.drift_deg = Eigen::AngleAxisd(revealed.linear()).angle() * 180 / M_PI;
+  if (!aligned.converged) {
+    std::lock_guard lock(mutex_);
+    loop_events_.push_back(event);  // not accepted: the views do not align densely
+    return;
+  }
+  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, lc.graph);
+  event.accepted = solved.accepted.back();
+  std::vector<Eigen::Isometry3d> mapper_corrections;
+  {
+    std::lock_guard lock(mutex_);
+    loop_events_.push_back(event);
+    if (!event.accepted) return;
+    edges_.push_back(loop);
+    // Keyframes tracking added while the graph was solved (threaded) follow the last solved one.
+    std::vector<Eigen::Isometry3d> correction(keyframe_world_.size());
+    for (std::size_t k = 0; k < keyframe_world_.size(); ++k) {
+      correction[k] = k < poses.size() ? solved.poses[k] * poses[k].inverse() : correction[poses.size() - 1];
+      keyframe_world_[k] = splat::orthonormalized(correction[k] * keyframe_world_[k]);
+    }
+    tracker_correction_ = correction.back() * tracker_correction_;
+    for (std::size_t k : mapper_keyframes_) mapper_corrections.push_back(correction[k]);
+  }
+  mapper_.correct_keyframes(mapper_corrections);
+}
+
 mapping::Vignetting SlamSystem::vignetting() const {
   std::lock_guard lock(mutex_);
   return mapper_.vignetting();
@@ -85,6 +189,7 @@ double SlamSystem::map_keyframe(const KeyframeJob& job) {
   const auto start = std::chrono::steady_clock::now();
   mapper_keyframes_.push_back(job.keyframe);  // the mapper numbers keyframes in the order added
   const mapping::MappingStats stats = mapper_.add_keyframe(job.frame, job.T_world_cam.inverse());
+  if (config_.loop_closure.enabled && config_.front_end == "odometry") close_loops(job);
   auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
   const auto poses = mapper_.keyframe_poses();
   const double ms = ms_since(start);
@@ -114,6 +219,7 @@ double measured_fraction(const splat::RgbdFrame& frame) {
 
 FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   rethrow_mapping_error();
+  apply_tracker_correction();
   FrameRecord record;
   const double measured = tracker_.started() ? 1.0 : held_out ? 0.0 : measured_fraction(frame);
   if (measured < kMinSeedDepthFraction) {
@@ -150,6 +256,14 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
     std::lock_guard lock(mutex_);
     if (record.keyframe) {
       job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size()};
+      if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
+        // The odometry edge: this keyframe as measured from its reference.
+        tracking::PoseGraphEdge edge;
+        edge.i = record.reference, edge.j = keyframe_world_.size();
+        edge.T_i_j = keyframe_world_[record.reference].inverse() * record.T_world_cam;
+        edge.information = edge_information(record.information);
+        edges_.push_back(edge);
+      }
       keyframe_world_.push_back(record.T_world_cam);
     }
   }
@@ -160,6 +274,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   const bool map_now = !threaded_ || (job && job->keyframe == 0 && config_.front_end == "render");
   if (job && map_now) {
     record.mapping_ms = map_keyframe(*job);
+    apply_tracker_correction();  // a loop it closed moves the motion model now
   } else if (job) {
     {
       std::lock_guard lock(mutex_);
@@ -181,7 +296,8 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
 SlamSystem::State SlamSystem::state() {
   wait_for_mapping();
   std::lock_guard lock(mutex_);
-  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_};
+  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
+          edges_,           loop_events_,     tracker_correction_};
 }
 
 void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
@@ -210,7 +326,15 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     if (number >= keyframe_frame.size()) inconsistent("keyframe " + std::to_string(number) + " does not exist");
     return load(keyframe_frame[number]);
   };
+  for (const tracking::PoseGraphEdge& e : s.edges) {
+    if (e.i >= keyframe_frame.size() || e.j >= keyframe_frame.size()) inconsistent("a pose graph edge names a keyframe that does not exist");
+  }
   tracker_.restore(s.tracker, keyframe);
+  for (std::size_t k : s.mapper_keyframes) {
+    const splat::RgbdFrame frame = keyframe(k);
+    places_.add(k, tracking::extract_place_features(frame, config_.loop_closure.places));
+    thumbnails_.emplace_back(k, thumbnail(frame));
+  }
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
     if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
     return keyframe(s.mapper_keyframes[number]);
@@ -220,6 +344,9 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   keyframe_world_ = std::move(s.keyframe_world);
   frames_ = std::move(s.frames);
   totals_ = s.totals;
+  edges_ = std::move(s.edges);
+  loop_events_ = std::move(s.loop_events);
+  tracker_correction_ = s.tracker_correction;
   map_ = std::make_shared<const splat::Gaussians>(mapper_.map());
 }
 

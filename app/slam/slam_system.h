@@ -25,8 +25,18 @@
 #include "slam/slam_config.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
+#include "tracking/place_recognition.h"
+#include "tracking/pose_graph.h"
 
 namespace app {
+
+// A loop candidate that place recognition verified, and what the pose graph made of it.
+struct LoopEvent {
+  std::size_t frame = 0, matched_frame = 0;  // the new keyframe's frame index, the earlier one's
+  int inliers = 0;
+  double drift_m = 0, drift_deg = 0;  // the error it revealed in the poses before solving
+  bool accepted = false;  // false: no dense alignment, or outside the drift budget (a look-alike place)
+};
 
 // What mapping did over a run.
 struct MappingTotals {
@@ -67,6 +77,7 @@ class SlamSystem {
   std::vector<Eigen::Isometry3d> trajectory() const;
   std::size_t keyframes() const;  // frames that became keyframes (mapped or skipped)
   MappingTotals mapping_totals() const;
+  std::vector<LoopEvent> loop_events() const;
   // The camera's vignetting as the final refinement estimated it (none before).
   mapping::Vignetting vignetting() const;
 
@@ -106,6 +117,9 @@ class SlamSystem {
     std::vector<Eigen::Isometry3d> keyframe_world;  // T_world_cam per keyframe number
     std::vector<FramePose> frames;              // one per frame processed
     MappingTotals totals;
+    std::vector<tracking::PoseGraphEdge> edges;  // the keyframe pose graph's edges
+    std::vector<LoopEvent> loop_events;
+    Eigen::Isometry3d tracker_correction = Eigen::Isometry3d::Identity();  // not yet applied
   };
   // The state between two frames (threaded: once mapping is idle).
   State state();
@@ -122,6 +136,12 @@ class SlamSystem {
   };
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
+  // Loop closure for a keyframe just mapped (the mapping thread's): place recognition against
+  // earlier keyframes, the pose graph, and the keyframes and the map moved to its solution.
+  void close_loops(const KeyframeJob& job);
+  std::size_t frame_of_keyframe(std::size_t keyframe) const;  // caller holds mutex_
+  // Applies a correction the mapping thread left for tracking (the caller is tracking).
+  void apply_tracker_correction();
   void mapping_loop();
   void rethrow_mapping_error();
   Eigen::Isometry3d pose_of(const FramePose& frame) const;  // caller holds mutex_
@@ -138,6 +158,12 @@ class SlamSystem {
   std::vector<FramePose> frames_;
   std::shared_ptr<const splat::Gaussians> map_ = std::make_shared<const splat::Gaussians>();
   MappingTotals totals_;
+  std::vector<tracking::PoseGraphEdge> edges_;  // keyframe numbers; odometry and accepted loops
+  std::vector<LoopEvent> loop_events_;
+  Eigen::Isometry3d tracker_correction_ = Eigen::Isometry3d::Identity();
+  tracking::PlaceDatabase places_;  // the mapping thread's alone while it runs, as are:
+  std::vector<std::pair<std::size_t, splat::RgbdFrame>> thumbnails_;  // keyframe, at dense_width
+  splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;
   std::optional<KeyframeJob> pending_;
   bool busy_ = false, stop_ = false;
   std::exception_ptr error_;

@@ -48,7 +48,8 @@ Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)
   map_.sh_degree = config_.seed.sh_degree;
 }
 
-std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes) {
+std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
+                            std::size_t anchor) {
   std::vector<float> mask(f.depth.size(), 1.f);
   if (!map_.empty()) {
     const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, T_cam_world), splat::images_only());
@@ -75,6 +76,7 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
   }
   const std::size_t added = seed_from_depth(fill_holes ? filled : f, T_cam_world.inverse(), config_.seed, map_, mask);
   adam_.append(added, map_.sh_degree);
+  anchors_.resize(map_.size(), static_cast<uint32_t>(anchor));
   return added;
 }
 
@@ -196,6 +198,10 @@ std::size_t Mapper::prune() {
   if (removed > 0) {
     remove_gaussians(map_, keep);
     adam_.remove(keep);
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < keep.size(); ++i)
+      if (keep[i]) anchors_[out++] = anchors_[i];
+    anchors_.resize(out);
   }
   return removed;
 }
@@ -208,7 +214,7 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
                       int iterations, bool densify_first) {
   if (map_.empty()) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
-  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes);
+  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
   T_cam_world = kf.T_cam_world;
@@ -231,6 +237,7 @@ MapperState Mapper::state() const {
   s.vignetting_v = vignetting_adam_.v;
   s.vignetting_steps = vignetting_adam_.steps;
   s.added = added_;
+  s.anchors = anchors_;
   std::ostringstream rng;
   rng << rng_;
   s.rng = rng.str();
@@ -246,6 +253,13 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   if (s.keyframes.size() > config_.max_keyframes || s.keyframes.size() > s.added) {
     throw splat::Error("Mapper::restore: " + std::to_string(s.keyframes.size()) + " stored keyframes of " +
                        std::to_string(s.added) + " added (at most " + std::to_string(config_.max_keyframes) + ")");
+  }
+  if (s.anchors.size() != s.map.size()) {
+    throw splat::Error("Mapper::restore: " + std::to_string(s.anchors.size()) + " anchors for " +
+                       std::to_string(s.map.size()) + " Gaussians");
+  }
+  for (uint32_t a : s.anchors) {
+    if (a >= std::max<std::size_t>(s.added, 1)) throw splat::Error("Mapper::restore: a Gaussian anchored to keyframe " + std::to_string(a) + " of " + std::to_string(s.added));
   }
   std::istringstream rng(s.rng);
   std::mt19937 restored_rng;
@@ -266,14 +280,36 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   vignetting_adam_.v = s.vignetting_v;
   vignetting_adam_.steps = s.vignetting_steps;
   added_ = s.added;
+  anchors_ = std::move(s.anchors);
   rng_ = restored_rng;
+}
+
+void Mapper::correct_keyframes(const std::vector<Eigen::Isometry3d>& world_correction) {
+  if (world_correction.size() != added_) {
+    throw splat::Error("Mapper::correct_keyframes: " + std::to_string(world_correction.size()) + " corrections for " +
+                       std::to_string(added_) + " keyframes");
+  }
+  std::vector<Eigen::Quaternionf> rotation;
+  for (const auto& C : world_correction) rotation.emplace_back(Eigen::Quaterniond(C.linear()).cast<float>());
+  for (std::size_t i = 0; i < map_.size(); ++i) {
+    const std::size_t k = anchors_[i];
+    const Eigen::Isometry3d& C = world_correction[k];
+    // (Higher SH bands would turn with the Gaussian too; loop corrections turn by degrees.)
+    float* m = &map_.means[i * 3];
+    const Eigen::Vector3d moved = C * Eigen::Vector3d(m[0], m[1], m[2]);
+    for (int a = 0; a < 3; ++a) m[a] = static_cast<float>(moved[a]);
+    float* q = &map_.rotations[i * 4];  // w, x, y, z
+    const Eigen::Quaternionf turned = rotation[k] * Eigen::Quaternionf(q[0], q[1], q[2], q[3]);
+    q[0] = turned.w(), q[1] = turned.x(), q[2] = turned.y(), q[3] = turned.z();
+  }
+  for (Keyframe& kf : keyframes_) kf.T_cam_world = splat::orthonormalized(kf.T_cam_world * world_correction[kf.number].inverse());
 }
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {
   MappingStats stats;
   keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
-  stats.added = densify(newest.frame, newest.T_cam_world, false);
+  stats.added = densify(newest.frame, newest.T_cam_world, false, newest.number);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();
   // Half the steps on the new keyframe, the rest spread over the window at random.

@@ -102,6 +102,7 @@ struct MapperState {
   std::array<double, 2> vignetting_m = {0, 0}, vignetting_v = {0, 0};
   int vignetting_steps = 0;
   std::size_t added = 0;  // keyframes added so far
+  std::vector<uint32_t> anchors;  // per Gaussian: the keyframe number that seeded it
   std::string rng;        // the window sampler, as std::mt19937's operator<< writes it
 };
 
@@ -127,6 +128,10 @@ class Mapper {
   splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
   // Removes transparent and oversized Gaussians; returns how many.
   std::size_t prune();
+  // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
+  // anchors) by world_correction[k] (T_world_new * T_world_old^-1), for every keyframe added so
+  // far. Gaussians seeded by the final refinement are anchored to the keyframe last added.
+  void correct_keyframes(const std::vector<Eigen::Isometry3d>& world_correction);
 
   MapperState state() const;
   // Continues from `state` (of a mapper with this configuration): `load(number)` gives keyframe
@@ -148,7 +153,8 @@ class Mapper {
   };
   // Seeds Gaussians where the frame (at its pose) sees what the map lacks, and with
   // `fill_holes` where it has no depth too; returns how many.
-  std::size_t densify(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, bool fill_holes);
+  std::size_t densify(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
+                      std::size_t anchor);
   std::vector<Keyframe*> window_for(Keyframe& newest);
   // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose (but
   // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose
@@ -172,6 +178,7 @@ class Mapper {
     int steps = 0;
   } vignetting_adam_;
   std::size_t added_ = 0;
+  std::vector<uint32_t> anchors_;  // per Gaussian, aligned with map_
   std::mt19937 rng_;
 };
 
