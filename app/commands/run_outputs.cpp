@@ -61,6 +61,7 @@ RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat
       r.T_world_cam = pose_from_json(f.at("T_world_cam"));
       r.tracked = f.at("tracked").get<bool>();
       r.retried = f.at("retried").get<bool>();
+      r.relocalized = f.value("relocalized", false);
       r.reason = f.at("reason").get<std::string>();
       r.keyframe = f.at("keyframe").get<bool>();
       r.held_out = f.at("held_out").get<bool>();
@@ -83,7 +84,7 @@ nlohmann::json RunOutputs::state() const {
   nlohmann::json frames = nlohmann::json::array();
   for (const FrameRecord& r : records_) {
     frames.push_back({{"timestamp", r.timestamp}, {"T_world_cam", pose_to_json(r.T_world_cam)},
-                      {"tracked", r.tracked}, {"retried", r.retried}, {"reason", r.reason},
+                      {"tracked", r.tracked}, {"retried", r.retried}, {"relocalized", r.relocalized}, {"reason", r.reason},
                       {"keyframe", r.keyframe}, {"held_out", r.held_out}, {"renders", r.renders}, {"overlap", r.overlap},
                       {"tracking_ms", r.tracking_ms}, {"mapping_ms", r.mapping_ms}, {"gaussians", r.gaussians}});
   }
@@ -157,6 +158,7 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
         {"loading", loading_ms_ / n}}},
       {"tracking_failures", failures_},
       {"tracking_retries", retries_},
+      {"tracking_relocalizations", std::count_if(records_.begin(), records_.end(), [](const FrameRecord& r) { return r.relocalized; })},
       {"held_out_frames", std::count_if(records_.begin(), records_.end(), [](const FrameRecord& r) { return r.held_out; })},
       {"peak_memory_mib", peak_memory_mib()},
       {"device_memory_mib", static_cast<double>(rasterizer_.device_memory_bytes()) / (1 << 20)},

@@ -138,6 +138,7 @@ Eigen::Isometry3d lap_pose(double s, int laps) {
 // The path at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
 Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {
   const double duration = (o.frames - 1) / o.fps;
+  if (o.kidnap_frame > 0 && seconds >= o.kidnap_frame / o.fps - 1e-9) seconds -= (o.kidnap_frame - o.kidnap_to) / o.fps;
   const double s = duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0;
   const Eigen::Isometry3d arc = o.laps > 0 ? lap_pose(s, o.laps) : arc_pose(s);
   if (o.shake_peak_rate <= 0) return arc;

@@ -15,6 +15,9 @@ struct SyntheticOptions {
   // 0: an arc through the room. N > 0: N laps of a circle about the room's middle, looking across
   // it, so the camera returns to where it began (loop closure's test).
   int laps = 0;
+  // A kidnapped camera: from frame kidnap_frame on, the path goes on from where it was at frame
+  // kidnap_to (a jump back to a place seen earlier). 0: none.
+  int kidnap_frame = 0, kidnap_to = 0;
   // Hard cases. A yaw oscillation on top of the arc, peaking at this rate (rad/s, at 1.5 Hz).
   double shake_peak_rate = 0;
   // Motion blur: colour averaged over this exposure (seconds) in blur_samples instants.

@@ -27,6 +27,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"", "front_end", &c.front_end},
       {"", "keyframe_render_iterations", &c.keyframe_render_iterations},
       {"", "recovery_keyframes", &c.recovery_keyframes},
+      {"", "lost_residual_factor", &c.lost_residual_factor},
       {"", "keyframe_overlap", &c.keyframe_overlap},
       {"", "keyframe_every", &c.keyframe_every},
       {"", "keyframe_translation", &c.keyframe_translation},

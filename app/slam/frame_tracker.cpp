@@ -48,6 +48,10 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   }
   record.tracking_ms = ms_since(start);
   // A failed frame's pose is a guess: the motion model keeps the last tracked poses.
+  if (record.tracked && config_.front_end == "odometry") {
+    residual_scales_.push_back(record.residual_scale);
+    if (residual_scales_.size() > 20) residual_scales_.pop_front();
+  }
   if (record.tracked) {
     last_poses_ = {last_poses_.back(), record.T_world_cam};
     last_times_ = {last_times_.back(), frame.timestamp};
@@ -63,6 +67,16 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
   record.tracked = r.converged;
   record.reason = r.reason;
+  record.residual_scale = r.depth_scale;
+  if (r.converged && residual_scales_.size() >= 5 && config_.odometry.depth_weight > 0) {
+    std::vector<double> recent(residual_scales_.begin(), residual_scales_.end());
+    std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
+    const double median = recent[recent.size() / 2];
+    if (r.depth_scale > config_.lost_residual_factor * median) {
+      record.tracked = false;
+      record.reason = "depth residuals " + std::to_string(r.depth_scale / median) + " times the recent median";
+    }
+  }
   record.overlap = r.overlap;
   record.reference = reference.keyframe;
   record.information = r.information;
@@ -139,13 +153,18 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
 }
 
+void FrameTracker::relocalized(const FrameRecord& record) {
+  last_poses_ = {record.T_world_cam};
+  last_times_ = {record.timestamp};
+}
+
 void FrameTracker::correct(const Eigen::Isometry3d& world_correction) {
   for (Eigen::Isometry3d& T : last_poses_) T = splat::orthonormalized(world_correction * T);
   last_keyframe_ = splat::orthonormalized(world_correction * last_keyframe_);
 }
 
 FrameTracker::State FrameTracker::state() const {
-  State s{last_poses_, last_times_, last_keyframe_, since_keyframe_, {}};
+  State s{last_poses_, last_times_, last_keyframe_, since_keyframe_, {}, {residual_scales_.begin(), residual_scales_.end()}};
   for (const Reference& r : references_) s.references.push_back(r.keyframe);
   return s;
 }
@@ -168,6 +187,7 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   last_keyframe_ = s.last_keyframe;
   since_keyframe_ = s.since_keyframe;
   references_ = std::move(references);
+  residual_scales_.assign(s.residual_scales.begin(), s.residual_scales.end());
   last_prepared_.reset();  // set by the next track() before anything reads it
 }
 

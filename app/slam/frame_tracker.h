@@ -26,6 +26,8 @@ struct FrameRecord {
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // as tracked
   bool tracked = true;  // false: tracking failed even after the retries
   bool retried = false;
+  bool relocalized = false;  // lost, then placed by matching it against every keyframe
+  double residual_scale = 0;  // odometry: the depth residuals' scale at the end
   std::string reason;   // why tracking failed
   bool keyframe = false;
   bool held_out = false;  // a test view: tracked, never mapped
@@ -58,6 +60,8 @@ class FrameTracker {
   // through the rasterizer against the map, from the odometry's estimate.
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
+  // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
+  void relocalized(const FrameRecord& record);
   // The world moved under tracking (a loop closed): the motion model's poses move with it.
   void correct(const Eigen::Isometry3d& world_correction);
 
@@ -68,6 +72,7 @@ class FrameTracker {
     Eigen::Isometry3d last_keyframe = Eigen::Isometry3d::Identity();
     int since_keyframe = 0;
     std::vector<std::size_t> references;  // odometry: reference keyframe numbers, newest first
+    std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
   };
   State state() const;
   // Continues from `state`: `keyframe(number)` gives that keyframe's frame. Throws splat::Error
@@ -99,6 +104,7 @@ class FrameTracker {
   // the others.
   std::shared_ptr<const tracking::OdometryFrame> last_prepared_;
   std::deque<Reference> references_;
+  std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
 };
 
 }  // namespace app

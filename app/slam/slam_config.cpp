@@ -9,6 +9,7 @@ void SlamConfig::validate() const {
   if (front_end != "odometry" && front_end != "render") check.fail("front_end", "\"odometry\" or \"render\"", "\"" + front_end + "\"");
   check.at_least("keyframe_render_iterations", keyframe_render_iterations, 0);
   check.at_least("recovery_keyframes", recovery_keyframes, 0);
+  check.at_least("lost_residual_factor", lost_residual_factor, 1.0);
   check.in_range("keyframe_overlap", keyframe_overlap, 0.0, 1.0);
   check.at_least("keyframe_every", keyframe_every, 1);
   check.positive("keyframe_translation", keyframe_translation);

@@ -40,6 +40,10 @@ struct SlamConfig {
   // Odometry: a frame lost against the newest reference keyframe is retried against this many
   // older ones.
   int recovery_keyframes = 3;
+  // Odometry: an alignment that converges with its depth residuals' scale this many times the
+  // median of the last frames' has found a wrong pose (a camera carried elsewhere still overlaps
+  // its reference somewhere): the frame counts as lost, and recovery and relocalization follow.
+  double lost_residual_factor = 3.0;
   // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
   // since the last keyframe.
   int keyframe_every = 5;

@@ -114,27 +114,45 @@ splat::RgbdFrame SlamSystem::thumbnail(const splat::RgbdFrame& frame) const {
   return splat::downsample(frame, factor);
 }
 
+std::optional<SlamSystem::Placement> SlamSystem::place(const splat::RgbdFrame& thumb, const tracking::PlaceFeatures& features,
+                                                      const std::function<bool(std::size_t)>& eligible) {
+  std::vector<tracking::PlaceMatch> matches;
+  splat::RgbdFrame matched;
+  {
+    std::lock_guard lock(places_mutex_);
+    matches = places_.query(features, eligible);
+    if (matches.empty()) return std::nullopt;
+    const auto it = std::find_if(thumbnails_.begin(), thumbnails_.end(),
+                                 [&](const auto& t) { return t.first == matches.front().keyframe; });
+    if (it == thumbnails_.end()) return std::nullopt;
+    matched = it->second;
+  }
+  const tracking::PlaceMatch& m = matches.front();
+  // Dense alignment of the two views from the RANSAC estimate.
+  tracking::OdometryConfig dense = config_.odometry;
+  dense.finest_width = matched.width();
+  const tracking::OdometryFrame reference(matched, dense), current(thumb, dense);
+  const tracking::OdometryResult aligned = tracking::align_rgbd(reference, current, m.T_keyframe_query.inverse(), dense);
+  if (!aligned.converged) return std::nullopt;
+  return Placement{m.keyframe, aligned.T_cur_ref.inverse(), edge_information(aligned.information), m.inliers};
+}
+
 void SlamSystem::close_loops(const KeyframeJob& job) {
   const LoopClosureConfig& lc = config_.loop_closure;
   tracking::PlaceFeatures features = tracking::extract_place_features(job.frame, lc.places);
+  const splat::RgbdFrame thumb = thumbnail(job.frame);
   const std::size_t separation = static_cast<std::size_t>(lc.min_separation);
-  const std::vector<tracking::PlaceMatch> matches =
-      places_.query(features, [&](std::size_t k) { return k + separation <= job.keyframe; });
-  places_.add(job.keyframe, std::move(features));
-  thumbnails_.emplace_back(job.keyframe, thumbnail(job.frame));
-  if (matches.empty()) return;
-  const tracking::PlaceMatch& m = matches.front();
-  // Dense alignment of the two keyframes from the RANSAC estimate.
-  const auto matched = std::find_if(thumbnails_.begin(), thumbnails_.end(), [&](const auto& t) { return t.first == m.keyframe; });
-  if (matched == thumbnails_.end()) return;
-  tracking::OdometryConfig dense = config_.odometry;
-  dense.finest_width = matched->second.width();
-  const tracking::OdometryFrame reference(matched->second, dense), current(thumbnails_.back().second, dense);
-  const tracking::OdometryResult aligned = tracking::align_rgbd(reference, current, m.T_keyframe_query.inverse(), dense);
+  const std::optional<Placement> found = place(thumb, features, [&](std::size_t k) { return k + separation <= job.keyframe; });
+  {
+    std::lock_guard lock(places_mutex_);
+    places_.add(job.keyframe, std::move(features));
+    thumbnails_.emplace_back(job.keyframe, thumb);
+  }
+  if (!found) return;
   tracking::PoseGraphEdge loop;
-  loop.i = m.keyframe, loop.j = job.keyframe, loop.loop = true;
-  loop.T_i_j = aligned.T_cur_ref.inverse();
-  loop.information = edge_information(aligned.information);
+  loop.i = found->keyframe, loop.j = job.keyframe, loop.loop = true;
+  loop.T_i_j = found->T_keyframe_frame;
+  loop.information = found->information;
   std::vector<Eigen::Isometry3d> poses;
   std::vector<tracking::PoseGraphEdge> edges;
   LoopEvent event;
@@ -143,18 +161,13 @@ void SlamSystem::close_loops(const KeyframeJob& job) {
     poses = keyframe_world_;
     edges = edges_;
     event.frame = frame_of_keyframe(job.keyframe);
-    event.matched_frame = frame_of_keyframe(m.keyframe);
+    event.matched_frame = frame_of_keyframe(found->keyframe);
   }
   edges.push_back(loop);
   const Eigen::Isometry3d revealed = (poses[loop.i].inverse() * poses[loop.j]).inverse() * loop.T_i_j;
-  event.inliers = m.inliers;
+  event.inliers = found->inliers;
   event.drift_m = revealed.translation().norm();
   event.drift_deg = Eigen::AngleAxisd(revealed.linear()).angle() * 180 / M_PI;
-  if (!aligned.converged) {
-    std::lock_guard lock(mutex_);
-    loop_events_.push_back(event);  // not accepted: the views do not align densely
-    return;
-  }
   const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, lc.graph);
   event.accepted = solved.accepted.back();
   std::vector<Eigen::Isometry3d> mapper_corrections;
@@ -246,7 +259,23 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
       std::lock_guard lock(mutex_);
       return keyframe_world_[k];
     });
-    if (!held_out && tracker_.wants_keyframe(record)) {
+    if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
+      // Lost even against the recent keyframes: look for the frame among all of them.
+      const tracking::PlaceFeatures features = tracking::extract_place_features(frame, config_.loop_closure.places);
+      if (const std::optional<Placement> found = place(thumbnail(frame), features, [](std::size_t) { return true; })) {
+        {
+          std::lock_guard lock(mutex_);
+          record.T_world_cam = splat::orthonormalized(keyframe_world_[found->keyframe] * found->T_keyframe_frame);
+          record.reason = "relocalized against the keyframe of frame " + std::to_string(frame_of_keyframe(found->keyframe));
+        }
+        record.tracked = record.relocalized = true;
+        record.reference = found->keyframe;
+        record.information = found->information;
+        tracker_.relocalized(record);
+      }
+    }
+    // A relocalized frame becomes a keyframe: tracking goes on against it.
+    if (!held_out && (record.relocalized || tracker_.wants_keyframe(record))) {
       record.keyframe = true;
       tracker_.refine_keyframe(map, frame, record);
     }
@@ -330,6 +359,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     if (e.i >= keyframe_frame.size() || e.j >= keyframe_frame.size()) inconsistent("a pose graph edge names a keyframe that does not exist");
   }
   tracker_.restore(s.tracker, keyframe);
+  std::lock_guard places_lock(places_mutex_);
   for (std::size_t k : s.mapper_keyframes) {
     const splat::RgbdFrame frame = keyframe(k);
     places_.add(k, tracking::extract_place_features(frame, config_.loop_closure.places));

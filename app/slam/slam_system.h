@@ -140,6 +140,15 @@ class SlamSystem {
   // earlier keyframes, the pose graph, and the keyframes and the map moved to its solution.
   void close_loops(const KeyframeJob& job);
   std::size_t frame_of_keyframe(std::size_t keyframe) const;  // caller holds mutex_
+  // A frame's place among the mapped keyframes: the best verified match, densely aligned.
+  struct Placement {
+    std::size_t keyframe;
+    Eigen::Isometry3d T_keyframe_frame;
+    Eigen::Matrix<double, 6, 6> information;
+    int inliers;
+  };
+  std::optional<Placement> place(const splat::RgbdFrame& thumb, const tracking::PlaceFeatures& features,
+                                 const std::function<bool(std::size_t)>& eligible);
   // Applies a correction the mapping thread left for tracking (the caller is tracking).
   void apply_tracker_correction();
   void mapping_loop();
@@ -161,7 +170,8 @@ class SlamSystem {
   std::vector<tracking::PoseGraphEdge> edges_;  // keyframe numbers; odometry and accepted loops
   std::vector<LoopEvent> loop_events_;
   Eigen::Isometry3d tracker_correction_ = Eigen::Isometry3d::Identity();
-  tracking::PlaceDatabase places_;  // the mapping thread's alone while it runs, as are:
+  std::mutex places_mutex_;  // guards places_ and thumbnails_ (mapping adds, tracking relocalizes)
+  tracking::PlaceDatabase places_;
   std::vector<std::pair<std::size_t, splat::RgbdFrame>> thumbnails_;  // keyframe, at dense_width
   splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;
   std::optional<KeyframeJob> pending_;

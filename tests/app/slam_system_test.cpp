@@ -427,3 +427,41 @@ TEST(SlamSystem, TwoLapsLoopClosureRemovesOdometryDrift) {
 }
 
 }  // namespace
+
+namespace {
+
+// A kidnapped camera: at frame 60 it is carried back to where it was at frame 15. Tracking
+// loses it, relocalization finds it among the keyframes within 10 frames, and the rest of the
+// run continues in the same map, at the true poses.
+TEST(SlamSystem, KidnappedCameraIsRelocalizedInTheSameMap) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 90;
+  o.kidnap_frame = 60;
+  o.kidnap_to = 15;
+  app::write_synthetic_sequence(dir / "kidnap", o);
+  const app::Dataset dataset = app::open_dataset(dir / "kidnap");
+  app::SlamConfig config;
+  config.mapping.iterations = 6;
+  auto rasterizer = splat::make_cpu_rasterizer();
+  app::SlamSystem slam(*rasterizer, config);
+  std::vector<app::FrameRecord> records = process_all(slam, dataset);
+  std::size_t relocalized_at = 0;
+  for (std::size_t i = 60; i < 70 && relocalized_at == 0; ++i) relocalized_at = records[i].relocalized ? i : 0;
+  ASSERT_GT(relocalized_at, 0u) << "not relocalized within 10 frames of the jump";
+  const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
+  std::vector<app::StampedPose> estimate, truth;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (i >= 60 && i < relocalized_at) continue;  // lost: no pose to score
+    estimate.push_back({records[i].timestamp, poses[i]});
+    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+    if (i >= relocalized_at) {
+      EXPECT_TRUE(records[i].tracked) << "frame " << i;
+    }
+  }
+  const app::TrajectoryErrors errors = app::evaluate_trajectory(estimate, truth);
+  std::printf("kidnapped at 60, relocalized at frame %zu; ATE %.2f cm\n", relocalized_at, 100 * errors.ate_rmse);
+  EXPECT_LT(errors.ate_rmse, 0.01);
+}
+
+}  // namespace
