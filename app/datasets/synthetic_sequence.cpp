@@ -32,31 +32,42 @@ double checker(double a, double b, double size) {
 }
 
 // The room: the inside of a 5 x 3 x 5 m box (y down, floor at y = 1.5), textured walls, two
-// spheres and two boxes.
+// spheres and two boxes. With `twin`, a second identical room continues it along x (10 m long,
+// the same objects and textures 5 m on): two places that look alike and are not the same.
 class Scene {
  public:
+  explicit Scene(bool twin) : copies_(twin ? 2 : 1) {}
   void intersect(const Vector3d& o, const Vector3d& d, Hit& hit) const {
-    room(o, d, hit);
-    sphere(o, d, Vector3d(-0.6, 0.9, 0.4), 0.6, hit, 0);
-    sphere(o, d, Vector3d(0.9, 1.15, -0.5), 0.35, hit, 1);
-    box(o, d, Vector3d(0.2, 0.7, 1.1), Vector3d(0.9, 1.5, 1.6), hit);
-    box(o, d, Vector3d(-1.8, 0.3, -1.6), Vector3d(-1.1, 1.5, -0.9), hit);
+    room(o, d, hit, copies_);
+    for (int copy = 0; copy < copies_; ++copy) {
+      const Vector3d shift(kRoomLength * copy, 0, 0);
+      sphere(o, d, Vector3d(-0.6, 0.9, 0.4) + shift, 0.6, hit, 0);
+      sphere(o, d, Vector3d(0.9, 1.15, -0.5) + shift, 0.35, hit, 1);
+      box(o, d, Vector3d(0.2, 0.7, 1.1) + shift, Vector3d(0.9, 1.5, 1.6) + shift, hit);
+      box(o, d, Vector3d(-1.8, 0.3, -1.6) + shift, Vector3d(-1.1, 1.5, -0.9) + shift, hit);
+    }
   }
 
  private:
-  static void room(const Vector3d& o, const Vector3d& d, Hit& hit) {
-    const Vector3d lo(-2.5, -1.5, -2.5), hi(2.5, 1.5, 2.5);
+  static constexpr double kRoomLength = 5.0;
+  int copies_;
+
+  static void room(const Vector3d& o, const Vector3d& d, Hit& hit, int copies) {
+    const Vector3d lo(-2.5, -1.5, -2.5), hi(2.5 + kRoomLength * (copies - 1), 1.5, 2.5);
     for (int axis = 0; axis < 3; ++axis) {
       for (int side = 0; side < 2; ++side) {
         if (std::abs(d[axis]) < 1e-12) continue;
         const double plane = side ? hi[axis] : lo[axis];
         const double t = (plane - o[axis]) / d[axis];
         if (t <= 1e-6 || t >= hit.t) continue;
-        const Vector3d p = o + t * d;
+        const Vector3d hit_point = o + t * d;
         const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-        if (p[a] < lo[a] || p[a] > hi[a] || p[b] < lo[b] || p[b] > hi[b]) continue;
+        if (hit_point[a] < lo[a] || hit_point[a] > hi[a] || hit_point[b] < lo[b] || hit_point[b] > hi[b]) continue;
         hit.t = t;
-        hit.point = p;
+        hit.point = hit_point;
+        // Textured as in the first room: x folded back into it.
+        Vector3d p = hit_point;
+        p.x() = std::fmod(p.x() + 2.5, kRoomLength) - 2.5;
         hit.normal = Vector3d::Zero();
         hit.normal[axis] = side ? -1 : 1;
         // Each wall its own colours, tiled in 0.4 m squares with a fine stripe texture.
@@ -136,11 +147,24 @@ Eigen::Isometry3d lap_pose(double s, int laps) {
 }
 
 // The path at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
+// Along the twin rooms at s in [0, 1]: from x = -1.5 to 6.5 (into the second room), 1.2 m from
+// the +z wall, looking across at the -z wall past the objects.
+Eigen::Isometry3d corridor_pose(double s) {
+  const Vector3d eye(-1.5 + 8.0 * s, -0.3, 1.3);
+  const Vector3d target(eye.x() + 0.3, 0.8, -1.0);
+  const Vector3d z = (target - eye).normalized();
+  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() << x, z.cross(x), z;
+  pose.translation() = eye;
+  return pose;
+}
+
 Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {
   const double duration = (o.frames - 1) / o.fps;
   if (o.kidnap_frame > 0 && seconds >= o.kidnap_frame / o.fps - 1e-9) seconds -= (o.kidnap_frame - o.kidnap_to) / o.fps;
   const double s = duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0;
-  const Eigen::Isometry3d arc = o.laps > 0 ? lap_pose(s, o.laps) : arc_pose(s);
+  const Eigen::Isometry3d arc = o.twin_rooms ? corridor_pose(s) : o.laps > 0 ? lap_pose(s, o.laps) : arc_pose(s);
   if (o.shake_peak_rate <= 0) return arc;
   constexpr double kShakeHz = 1.5;
   const double yaw = o.shake_peak_rate / (2 * M_PI * kShakeHz) * std::sin(2 * M_PI * kShakeHz * seconds);
@@ -188,7 +212,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::normal_distribution<double> gauss(0, 1);
   std::filesystem::create_directories(dir / "rgb");
   std::filesystem::create_directories(dir / "depth");
-  const Scene scene;
+  const Scene scene(o.twin_rooms);
   const Vector3d light = Vector3d(0.4, -1.0, 0.3).normalized();  // from above (y down)
   std::vector<StampedPose> truth;
   std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";

@@ -15,6 +15,9 @@ struct SyntheticOptions {
   // 0: an arc through the room. N > 0: N laps of a circle about the room's middle, looking across
   // it, so the camera returns to where it began (loop closure's test).
   int laps = 0;
+  // Two identical rooms one after the other along x, walked through from the first into the
+  // second: a place that looks like one seen before and is not (a false loop to reject).
+  bool twin_rooms = false;
   // A kidnapped camera: from frame kidnap_frame on, the path goes on from where it was at frame
   // kidnap_to (a jump back to a place seen earlier). 0: none.
   int kidnap_frame = 0, kidnap_to = 0;

@@ -95,7 +95,10 @@ void SlamSystem::apply_tracker_correction() {
     correction = tracker_correction_;
     tracker_correction_ = Eigen::Isometry3d::Identity();
   }
-  tracker_.correct(correction);
+  const double* c = correction.matrix().data();
+  bool identity = true;
+  for (int k = 0; k < 16; ++k) identity = identity && c[k] == (k % 5 == 0 ? 1.0 : 0.0);
+  if (!identity) tracker_.correct(correction);  // no loop closed: the poses stay bit for bit
 }
 
 namespace {

@@ -465,3 +465,45 @@ TEST(SlamSystem, KidnappedCameraIsRelocalizedInTheSameMap) {
 }
 
 }  // namespace
+
+namespace {
+
+// Two identical rooms walked through one after the other: the second looks like the first, so
+// place recognition and dense alignment agree on a "loop" 5 m long, which the drift budget
+// rejects; the trajectory is the one without loop closure.
+TEST(SlamSystem, LookAlikePlaceIsNotTakenForALoop) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 120;
+  o.twin_rooms = true;
+  app::write_synthetic_sequence(dir / "twins", o);
+  const app::Dataset dataset = app::open_dataset(dir / "twins");
+  auto run = [&](bool loop_closure, std::vector<app::LoopEvent>& events) {
+    app::SlamConfig config;
+    config.loop_closure.enabled = loop_closure;
+    config.mapping.iterations = 6;
+    auto rasterizer = splat::make_cpu_rasterizer();
+    app::SlamSystem slam(*rasterizer, config);
+    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
+    std::vector<app::StampedPose> estimate, truth;
+    const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      estimate.push_back({records[i].timestamp, poses[i]});
+      truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+    }
+    events = slam.loop_events();
+    return app::evaluate_trajectory(estimate, truth).ate_rmse;
+  };
+  std::vector<app::LoopEvent> none, events;
+  const double without = run(false, none);
+  const double with = run(true, events);
+  std::size_t accepted = 0;
+  for (const auto& e : events) accepted += e.accepted;
+  std::printf("twin rooms: %zu look-alike loops found, %zu accepted; ATE %.2f cm without loop closure, %.2f cm with\n",
+              events.size(), accepted, 100 * without, 100 * with);
+  EXPECT_GT(events.size(), 0u) << "the second room must look like the first to place recognition";
+  EXPECT_EQ(accepted, 0u);
+  EXPECT_NEAR(with, without, 1e-4);
+}
+
+}  // namespace
