@@ -119,17 +119,22 @@ class Scene {
   }
 };
 
+// Camera to world at `eye` looking at `target`, image rows level (world y is down).
+Eigen::Isometry3d look_from(const Vector3d& eye, const Vector3d& target) {
+  const Vector3d z = (target - eye).normalized();
+  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() << x, z.cross(x), z;
+  pose.translation() = eye;
+  return pose;
+}
+
 // Camera to world at time s in [0, 1]: a smooth arc through the room, looking at its middle.
 Eigen::Isometry3d arc_pose(double s) {
   const double angle = -0.6 + 1.0 * s;
   const Vector3d eye(1.6 * std::sin(angle), 0.1 * std::sin(3 * s), -1.9 * std::cos(angle) + 0.3 * s);
   const Vector3d target(0.1 * std::sin(2 * s), 0.8, 0.3);
-  const Vector3d z = (target - eye).normalized();
-  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() << x, z.cross(x), z;
-  pose.translation() = eye;
-  return pose;
+  return look_from(eye, target);
 }
 
 // `laps` turns of a 1.7 m circle about the room's middle at s in [0, 1], looking across the
@@ -138,12 +143,7 @@ Eigen::Isometry3d lap_pose(double s, int laps) {
   const double angle = 2 * M_PI * laps * s;
   const Vector3d eye(1.7 * std::sin(angle), -0.2 + 0.1 * std::sin(5 * angle), -1.7 * std::cos(angle));
   const Vector3d target(0.4 * std::cos(angle), 0.9, 0.4 * std::sin(angle));
-  const Vector3d z = (target - eye).normalized();
-  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() << x, z.cross(x), z;
-  pose.translation() = eye;
-  return pose;
+  return look_from(eye, target);
 }
 
 // The path at `seconds` into the sequence, with the optional yaw shake about the camera's y axis.
@@ -152,12 +152,7 @@ Eigen::Isometry3d lap_pose(double s, int laps) {
 Eigen::Isometry3d corridor_pose(double s) {
   const Vector3d eye(-1.5 + 8.0 * s, -0.3, 1.3);
   const Vector3d target(eye.x() + 0.3, 0.8, -1.0);
-  const Vector3d z = (target - eye).normalized();
-  const Vector3d x = Vector3d(0, 1, 0).cross(z).normalized();  // world y is down
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() << x, z.cross(x), z;
-  pose.translation() = eye;
-  return pose;
+  return look_from(eye, target);
 }
 
 Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {

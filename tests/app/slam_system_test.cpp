@@ -384,6 +384,34 @@ TEST(SlamSystem, HardMotionSyntheticSequenceTracksEveryFrame) {
 
 namespace {
 
+// The ATE of a run over the whole sequence with loop closure on or off (light mapping), and the
+// loops it verified. `threaded`: mapping (and so loop closure) on its own thread, waited for
+// after each frame.
+double ate_with_loop_closure(const app::Dataset& dataset, bool loop_closure, std::vector<app::LoopEvent>& events,
+                             bool threaded = false) {
+  app::SlamConfig config;
+  config.loop_closure.enabled = loop_closure;
+  config.mapping.iterations = 6;
+  auto rasterizer = splat::make_cpu_rasterizer(), mapping_rasterizer = splat::make_cpu_rasterizer();
+  std::unique_ptr<app::SlamSystem> system = threaded ? std::make_unique<app::SlamSystem>(*rasterizer, *mapping_rasterizer, config)
+                                                     : std::make_unique<app::SlamSystem>(*rasterizer, config);
+  app::SlamSystem& slam = *system;
+  std::vector<app::FrameRecord> records;
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
+    records.push_back(slam.process(dataset.load(i)));
+    slam.wait_for_mapping();
+  }
+  slam.finish();
+  const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
+  std::vector<app::StampedPose> estimate, truth;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    estimate.push_back({records[i].timestamp, poses[i]});
+    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+  }
+  events = slam.loop_events();
+  return app::evaluate_trajectory(estimate, truth).ate_rmse;
+}
+
 // Two laps of the room with a noisy, blurred camera (1.3 rad/s, 1/60 s exposure, 8 mm depth
 // noise at 1 m, holes): odometry drifts; the second lap revisits the first, place recognition
 // finds it, dense alignment measures it, and the pose graph removes the drift.
@@ -398,32 +426,19 @@ TEST(SlamSystem, TwoLapsLoopClosureRemovesOdometryDrift) {
   o.depth_holes = 0.05;
   app::write_synthetic_sequence(dir / "laps", o);
   const app::Dataset dataset = app::open_dataset(dir / "laps");
-  auto run = [&](bool loop_closure, std::vector<app::LoopEvent>& events) {
-    app::SlamConfig config;
-    config.loop_closure.enabled = loop_closure;
-    config.mapping.iterations = 6;
-    auto rasterizer = splat::make_cpu_rasterizer();
-    app::SlamSystem slam(*rasterizer, config);
-    std::vector<app::StampedPose> estimate, truth;
-    for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
-      const app::FrameRecord r = slam.process(dataset.load(i));
-      truth.push_back({r.timestamp, *dataset.entries[i].T_world_cam_truth});
-      estimate.push_back({r.timestamp, {}});
-    }
-    const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
-    for (std::size_t i = 0; i < poses.size(); ++i) estimate[i].T_world_cam = poses[i];
-    events = slam.loop_events();
-    return app::evaluate_trajectory(estimate, truth).ate_rmse;
-  };
   std::vector<app::LoopEvent> none, loops;
-  const double odometry = run(false, none);
-  const double closed = run(true, loops);
+  const double odometry = ate_with_loop_closure(dataset, false, none);
+  const double closed = ate_with_loop_closure(dataset, true, loops);
   std::size_t accepted = 0;
   for (const auto& e : loops) accepted += e.accepted;
   std::printf("two laps: ATE %.2f cm without loop closure, %.2f cm with (%zu loops accepted of %zu)\n", 100 * odometry,
               100 * closed, accepted, loops.size());
   EXPECT_GT(accepted, 0u);
   EXPECT_LT(closed, odometry / 5);
+  // Live mode closes the same loops on its mapping thread.
+  std::vector<app::LoopEvent> threaded_loops;
+  EXPECT_NEAR(ate_with_loop_closure(dataset, true, threaded_loops, true), closed, 1e-9);
+  EXPECT_EQ(threaded_loops.size(), loops.size());
 }
 
 }  // namespace
@@ -478,25 +493,9 @@ TEST(SlamSystem, LookAlikePlaceIsNotTakenForALoop) {
   o.twin_rooms = true;
   app::write_synthetic_sequence(dir / "twins", o);
   const app::Dataset dataset = app::open_dataset(dir / "twins");
-  auto run = [&](bool loop_closure, std::vector<app::LoopEvent>& events) {
-    app::SlamConfig config;
-    config.loop_closure.enabled = loop_closure;
-    config.mapping.iterations = 6;
-    auto rasterizer = splat::make_cpu_rasterizer();
-    app::SlamSystem slam(*rasterizer, config);
-    const std::vector<app::FrameRecord> records = process_all(slam, dataset);
-    std::vector<app::StampedPose> estimate, truth;
-    const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
-    for (std::size_t i = 0; i < poses.size(); ++i) {
-      estimate.push_back({records[i].timestamp, poses[i]});
-      truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
-    }
-    events = slam.loop_events();
-    return app::evaluate_trajectory(estimate, truth).ate_rmse;
-  };
   std::vector<app::LoopEvent> none, events;
-  const double without = run(false, none);
-  const double with = run(true, events);
+  const double without = ate_with_loop_closure(dataset, false, none);
+  const double with = ate_with_loop_closure(dataset, true, events);
   std::size_t accepted = 0;
   for (const auto& e : events) accepted += e.accepted;
   std::printf("twin rooms: %zu look-alike loops found, %zu accepted; ATE %.2f cm without loop closure, %.2f cm with\n",
