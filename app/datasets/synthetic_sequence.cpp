@@ -16,6 +16,7 @@
 #include "io/image_io.h"
 #include "io/trajectory.h"
 #include "splat/error.h"
+#include "splat/thread_pool.h"
 
 namespace app {
 namespace {
@@ -208,6 +209,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::filesystem::create_directories(dir / "rgb");
   std::filesystem::create_directories(dir / "depth");
   const Scene scene(o.twin_rooms);
+  splat::ThreadPool pool;
   const Vector3d light = Vector3d(0.4, -1.0, 0.3).normalized();  // from above (y down)
   std::vector<StampedPose> truth;
   std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";
@@ -224,7 +226,9 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     const std::vector<uint8_t> holes = hole_mask(o.width, o.height, o.depth_holes, rng);
     std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
     splat::Image16 depth(o.width, o.height, 1);
-    for (int y = 0; y < o.height; ++y) {
+    // Colour, row by row on every core (no random numbers: the same image on any machine).
+    pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {
+      const int y = static_cast<int>(row);
       for (int x = 0; x < o.width; ++x) {
         Vector3d color = Vector3d::Zero();
         const double weight = 0.25 / static_cast<double>(instants.size());
@@ -236,6 +240,11 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
             if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
           }
         }
+        for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
+      }
+    });
+    for (int y = 0; y < o.height; ++y) {
+      for (int x = 0; x < o.width; ++x) {
         // Depth at the pixel centre, mid-exposure.
         const Vector3d ray = (pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
         Hit hit;
@@ -246,7 +255,6 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
           if (o.depth_noise > 0) z += o.depth_noise * z * z * gauss(rng);
           depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
         }
-        for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
       }
     }
     char name[64];
