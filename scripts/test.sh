@@ -25,4 +25,8 @@ scripts/cross_test_arm64.sh
 scripts/fuzz.sh "${GSLAM_FUZZ_SECONDS:-20}"
 fuzz_build=${GSLAM_FUZZ_BUILD_DIR:-build-fuzz}
 cmake --build "$fuzz_build"
-GSLAM_TEST_TIME_SCALE=8 ctest --test-dir "$fuzz_build" --output-on-failure --timeout 1800 -j "$(nproc)"
+# One test is left out there: the two-lap loop-closure sequence (600 tracked and mapped frames)
+# takes over 20 minutes under ASan. Its parts run there in smaller tests: the pose graph, place
+# recognition, the mapper's keyframe corrections, the look-alike and kidnapped sequences.
+GSLAM_TEST_TIME_SCALE=8 ctest --test-dir "$fuzz_build" --output-on-failure --timeout 1800 -j "$(nproc)" \
+  -E 'TwoLapsLoopClosureRemovesOdometryDrift'
