@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
-# Cross-builds the rasterizer (splat and splat_tests) for arm64 with a portable -march and runs
-# its tests under qemu-user-static: the CPU backend's vector code must build and agree with its
-# oracles on ARM too. Installs what it needs (Debian's cross compiler, qemu, and GoogleTest's
-# arm64 package through multiarch). The other libraries need target packages that Debian cannot
-# install beside the build machine's (libopenexr-dev, libopencv-dev); on the device itself the
-# whole project builds natively with scripts/build.sh.
+# Cross-builds gslam for arm64 (Jetson class) with a portable -march and runs the CPU test
+# suites (splat_tests, tracking_tests, mapping_tests) under qemu-user-static.
+# Target libraries come from an arm64 sysroot: Debian 12's arm64 packages extracted by
+# mmdebstrap into a folder (no maintainer scripts run, nothing installed on this machine).
+# Several -dev packages (OpenEXR, glog, gflags) are not Multi-Arch, so installing their arm64
+# versions beside the build machine's would remove those. The sysroot is made once and kept
+# (GSLAM_ARM64_SYSROOT, default ~/.cache/gslam/sysroot-arm64); on a Jetson the whole project
+# builds natively with scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-if ! dpkg --print-foreign-architectures | grep -qx arm64; then $sudo dpkg --add-architecture arm64; fi
 missing=()
-for p in crossbuild-essential-arm64 qemu-user-static libgtest-dev:arm64; do
+for p in crossbuild-essential-arm64 qemu-user-static mmdebstrap; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
@@ -19,10 +20,47 @@ if [ ${#missing[@]} -gt 0 ]; then
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+
+# The arm64 versions of the packages scripts/install_deps.sh installs (less Vulkan, the viewer
+# and the tools: those parts are built natively on the device).
+target_packages=libc6-dev,libstdc++-12-dev,libeigen3-dev,libglm-dev,libpng-dev,libjpeg-dev,libopenexr-dev
+target_packages+=,libtinygltf-dev,nlohmann-json3-dev,libcli11-dev,libgtest-dev,libstb-dev,libopencv-dev,libceres-dev
+sysroot=${GSLAM_ARM64_SYSROOT:-$HOME/.cache/gslam/sysroot-arm64}
+stamp="$sysroot/.gslam-packages"
+if ! [ -f "$stamp" ] || [ "$(cat "$stamp")" != "$target_packages" ]; then
+  echo "arm64 sysroot: extracting Debian 12 packages into $sysroot"
+  $sudo rm -rf "$sysroot"
+  mkdir -p "$(dirname "$sysroot")"
+  $sudo mmdebstrap --quiet --variant=extract --architectures=arm64 --include="$target_packages" \
+    --dpkgopt='path-exclude=/usr/share/doc/*' --dpkgopt='path-exclude=/usr/share/man/*' \
+    bookworm "$sysroot" > /dev/null
+  $sudo chown -R "$(id -u):$(id -g)" "$sysroot"
+  lib="$sysroot/usr/lib/aarch64-linux-gnu"
+  # What dpkg's alternatives would have linked: the BLAS and LAPACK that Ceres links by name.
+  for name in libblas.so libblas.so.3 liblapack.so liblapack.so.3; do
+    [ -e "$lib/$name" ] || ln -s "atlas/$name" "$lib/$name"
+  done
+  # Packages' CMake files name absolute /usr paths; inside the sysroot they mean the sysroot's.
+  cmake_dirs=()
+  for d in "$lib/cmake" "$sysroot/usr/lib/cmake" "$sysroot/usr/share/cmake"; do [ -d "$d" ] && cmake_dirs+=("$d"); done
+  grep -rlE '[";](/usr/lib/aarch64-linux-gnu|/usr/include)' "${cmake_dirs[@]}" |
+    xargs -r sed -i -E "s#([\";])(/usr/lib/aarch64-linux-gnu|/usr/include)#\1$sysroot\2#g"
+  echo "$target_packages" > "$stamp"
+fi
+
 build=${GSLAM_ARM64_BUILD_DIR:-build-arm64}
 mkdir -p "$build"
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake \
-  -DGSLAM_CORE_ONLY=ON -DGSLAM_NATIVE_ARCH=OFF -DGSLAM_ENABLE_VULKAN=OFF -DGSLAM_WARNINGS_AS_ERRORS=ON > "$build/configure.log"
-cmake --build "$build"
-aarch64-linux-gnu-readelf -h "$build/tests/splat_tests" | grep -q AArch64 || { echo "splat_tests is not an arm64 binary"; exit 1; }
-ctest --test-dir "$build" --output-on-failure --timeout 1200 -j "$(nproc)"
+GSLAM_ARM64_SYSROOT="$sysroot" cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake -DGSLAM_NATIVE_ARCH=OFF -DGSLAM_ENABLE_VULKAN=OFF \
+  -DGSLAM_BUILD_BENCHMARKS=OFF -DGSLAM_WARNINGS_AS_ERRORS=ON > "$build/configure.log"
+suites=(splat_tests tracking_tests mapping_tests)
+cmake --build "$build" --target "${suites[@]}"
+for suite in "${suites[@]}"; do
+  aarch64-linux-gnu-readelf -h "$build/tests/$suite" | grep -q AArch64 || { echo "$suite is not an arm64 binary"; exit 1; }
+done
+# Left out under emulation: the two longest rasterizer-bound runs (6 and 3 minutes under qemu
+# on 2 cores). The code they drive is covered here by splat_tests and the other tracking and
+# mapping tests, and natively by the main suite.
+slow='^(Vignetting\.RefinementLearnsTheFramesFallOffAndNoneWhereThereIsNone|DonutTracking\.ConvergesFromThreeCentimetresAndTwoDegrees)$'
+labels=$(IFS='|'; echo "^(${suites[*]})$")
+ctest --test-dir "$build" --output-on-failure --timeout 1200 -j "$(nproc)" -L "$labels" -E "$slow"

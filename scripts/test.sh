@@ -16,7 +16,7 @@ fi
 ctest --test-dir "${GSLAM_BUILD_DIR:-build}" --output-on-failure --timeout "$timeout_s" -j "$(nproc)"
 if [ "${1:-}" = "--sanitize" ]; then exit 0; fi
 
-# arm64 (Jetson class): the rasterizer cross-built with a portable -march, its tests under qemu.
+# arm64 (Jetson class): cross-built with a portable -march; the CPU suites run under qemu.
 scripts/cross_test_arm64.sh
 
 # Hostile input: every reader's libFuzzer target (clang, ASan + UBSan), then the whole suite in
