@@ -31,9 +31,12 @@ if ! [ -f "$stamp" ] || [ "$(cat "$stamp")" != "$target_packages" ]; then
   echo "arm64 sysroot: extracting Debian 12 packages into $sysroot"
   $sudo rm -rf "$sysroot"
   mkdir -p "$(dirname "$sysroot")"
+  # From the Debian mirror this machine's apt uses (it may be a snapshot: no expiry check).
+  mirror=$(sed -n 's/^URIs: *\([^ ]*\/debian\)$/\1/p' /etc/apt/sources.list.d/debian.sources 2>/dev/null | head -1)
   $sudo mmdebstrap --quiet --variant=extract --architectures=arm64 --include="$target_packages" \
+    --aptopt='Acquire::Check-Valid-Until "false"' \
     --dpkgopt='path-exclude=/usr/share/doc/*' --dpkgopt='path-exclude=/usr/share/man/*' \
-    bookworm "$sysroot" > /dev/null
+    bookworm "$sysroot" "${mirror:-http://deb.debian.org/debian}" > /dev/null
   $sudo chown -R "$(id -u):$(id -g)" "$sysroot"
   lib="$sysroot/usr/lib/aarch64-linux-gnu"
   # What dpkg's alternatives would have linked: the BLAS and LAPACK that Ceres links by name.
