@@ -10,6 +10,7 @@
 #include "slam/slam_system.h"
 #include "support/backends.h"
 #include "support/expect_error.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -57,8 +58,7 @@ TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 14;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   const RunResult straight = run(dataset, dataset.entries.size(), {});
   for (std::size_t stop : {1u, 6u, 11u}) {
     const RunResult resumed = run(dataset, stop, dir / "checkpoint.bin");
@@ -78,8 +78,7 @@ TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 4;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   auto rasterizer = splat::make_cpu_rasterizer({2});
   app::SlamSystem slam(*rasterizer, checkpoint_config());
   for (std::size_t i = 0; i < dataset.entries.size(); ++i) slam.process(dataset.load(i));

@@ -9,6 +9,7 @@
 #include "splat/error.h"
 #include "splat/losses.h"
 #include "support/backends.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 #include "support/test_data.h"
 
@@ -35,8 +36,7 @@ std::vector<app::StampedPose> track(splat::Rasterizer& rasterizer, const app::Da
 app::Dataset synthetic_dataset(const gslam::test::TempDir& dir, int frames) {
   app::SyntheticOptions o;
   o.frames = frames;
-  app::write_synthetic_sequence(dir / "seq", o);
-  return app::open_dataset(dir / "seq");
+  return gslam::test::synthetic_dataset(dir / "seq", o);
 }
 
 std::vector<app::FrameRecord> process_all(app::SlamSystem& slam, const app::Dataset& dataset) {
@@ -364,8 +364,7 @@ TEST(SlamSystem, HardMotionSyntheticSequenceTracksEveryFrame) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o = app::SyntheticOptions::hard_motion();
   o.frames = 60;  // two seconds: three shake periods, six rotation-rate peaks
-  app::write_synthetic_sequence(dir / "hard", o);
-  const app::Dataset dataset = app::open_dataset(dir / "hard");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "hard", o);
   double peak_rate = 0;
   for (std::size_t i = 1; i < dataset.entries.size(); ++i) {
     const Eigen::Isometry3d step = dataset.entries[i - 1].T_world_cam_truth->inverse() * *dataset.entries[i].T_world_cam_truth;
@@ -427,8 +426,7 @@ TEST(SlamSystem, TwoLapsLoopClosureRemovesOdometryDrift) {
   o.blur_samples = 4;
   o.depth_noise = 0.008;
   o.depth_holes = 0.05;
-  app::write_synthetic_sequence(dir / "laps", o);
-  const app::Dataset dataset = app::open_dataset(dir / "laps");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "laps", o);
   // With loop closure as `live` runs it: on the mapping thread.
   std::vector<app::LoopEvent> none, loops;
   const double odometry = ate_with_loop_closure(dataset, false, none);
@@ -454,8 +452,7 @@ TEST(SlamSystem, KidnappedCameraIsRelocalizedInTheSameMap) {
   o.frames = 90;
   o.kidnap_frame = 60;
   o.kidnap_to = 15;
-  app::write_synthetic_sequence(dir / "kidnap", o);
-  const app::Dataset dataset = app::open_dataset(dir / "kidnap");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "kidnap", o);
   app::SlamConfig config;
   config.mapping.iterations = 6;
   auto rasterizer = splat::make_cpu_rasterizer();
@@ -491,8 +488,7 @@ TEST(SlamSystem, LookAlikePlaceIsNotTakenForALoop) {
   app::SyntheticOptions o;
   o.frames = 120;
   o.twin_rooms = true;
-  app::write_synthetic_sequence(dir / "twins", o);
-  const app::Dataset dataset = app::open_dataset(dir / "twins");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "twins", o);
   std::vector<app::LoopEvent> none, events;
   const double without = ate_with_loop_closure(dataset, false, none);
   const double with = ate_with_loop_closure(dataset, true, events);

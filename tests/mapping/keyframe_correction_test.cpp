@@ -7,6 +7,7 @@
 #include "mapping/mapper.h"
 #include "splat/error.h"
 #include "splat/rasterizer.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -15,8 +16,7 @@ TEST(KeyframeCorrection, GaussiansMoveRigidlyWithTheKeyframeThatSeededThem) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 12;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   auto rasterizer = splat::make_cpu_rasterizer();
   mapping::MapperConfig config;
   config.iterations = 2;

@@ -9,6 +9,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "mapping/mapper.h"
 #include "splat/rasterizer.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -17,8 +18,7 @@ TEST(RefineDensify, SeedsUncoveredHolesOnlyWhenAskedAndAtTheirNeighboursDepth) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 1;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   // The left half of the frame has no depth: the keyframe seeds the right half alone.
   splat::RgbdFrame frame = dataset.load(0);
   const int w = frame.width(), h = frame.height();

@@ -11,6 +11,7 @@
 #include "mapping/vignetting.h"
 #include "splat/error.h"
 #include "splat/rasterizer.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -73,8 +74,7 @@ TEST(Vignetting, RejectsAnImageOfTheWrongSize) {
 TEST(Vignetting, RefinementLearnsTheFramesFallOffAndNoneWhereThereIsNone) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset dataset = app::open_dataset(dir / "seq");
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   // Every sixth frame: the same surfaces at different places in the image, which is what tells
   // the fall-off from the surfaces' colours.
   std::vector<std::size_t> frames;

@@ -9,6 +9,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "splat/error.h"
 #include "splat/se3.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 #include "support/test_data.h"
 #include "tracking/rgbd_odometry.h"
@@ -31,8 +32,7 @@ Eigen::Isometry3d true_motion(const app::Dataset& d, std::size_t ref, std::size_
 app::Dataset synthetic(const gslam::test::TempDir& dir, int frames) {
   app::SyntheticOptions o;
   o.frames = frames;
-  app::write_synthetic_sequence(dir / "seq", o);
-  return app::open_dataset(dir / "seq");
+  return gslam::test::synthetic_dataset(dir / "seq", o);
 }
 
 TEST(RgbdOdometry, AlignsSyntheticFramesFromIdentityToThreeMillimetres) {

@@ -7,6 +7,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/synthetic_sequence.h"
+#include "support/synthetic_dataset.h"
 #include "support/temp_dir.h"
 #include "tracking/place_recognition.h"
 
@@ -16,8 +17,7 @@ TEST(PlaceRecognition, VerifiedMatchGivesTheRelativePoseOfTwoViews) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 30;
-  app::write_synthetic_sequence(dir / "seq", o);
-  const app::Dataset d = app::open_dataset(dir / "seq");
+  const app::Dataset d = gslam::test::synthetic_dataset(dir / "seq", o);
   tracking::PlaceDatabase db;
   for (std::size_t k : {0u, 10u}) db.add(k, tracking::extract_place_features(d.load(k)));
   ASSERT_EQ(db.size(), 2u);
