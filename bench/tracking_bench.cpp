@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
     std::shared_ptr<const tracking::OdometryFrame> reference;
     Eigen::Isometry3d T_world_ref = Eigen::Isometry3d::Identity(), T_world_cur = T_world_ref, velocity = T_world_ref;
     int since_keyframe = 0, failures = 0;
+    double velocity_dt = 0, last_tracked_time = frames.empty() ? 0 : frames[0].timestamp;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const auto start = std::chrono::steady_clock::now();
       auto prepared = std::make_shared<const tracking::OdometryFrame>(frames[i], config.odometry);
@@ -69,11 +70,19 @@ int main(int argc, char** argv) {
       bool keyframe = !reference;
       if (reference) {
         const Eigen::Isometry3d guess = T_world_cur * velocity;
+        // The weighting the SLAM system uses: from the angular rate of the last tracked step.
+        tracking::OdometryConfig odometry = config.odometry;
+        const double rate = velocity_dt > 0 ? Eigen::AngleAxisd(velocity.linear()).angle() / velocity_dt : 0;
+        odometry.depth_weight = tracking::blur_aware_depth_weight(config.odometry, *prepared, rate);
         const tracking::OdometryResult r =
-            tracking::align_rgbd(*reference, *prepared, guess.inverse() * T_world_ref, config.odometry);
+            tracking::align_rgbd(*reference, *prepared, guess.inverse() * T_world_ref, odometry);
         failures += r.converged ? 0 : 1;
         const Eigen::Isometry3d next = T_world_ref * r.T_cur_ref.inverse();
-        if (r.converged) velocity = T_world_cur.inverse() * next, T_world_cur = next;
+        if (r.converged) {
+          velocity = T_world_cur.inverse() * next, T_world_cur = next;
+          velocity_dt = frames[i].timestamp - last_tracked_time;
+          last_tracked_time = frames[i].timestamp;
+        }
         keyframe = r.converged && (++since_keyframe >= config.keyframe_every || r.overlap < config.keyframe_overlap);
       }
       const auto end = std::chrono::steady_clock::now();

@@ -62,6 +62,8 @@ std::vector<Field> fields(SlamConfig& c) {
       {"odometry", "depth_noise", &o.depth_noise},
       {"odometry", "t_dof", &o.t_dof},
       {"odometry", "depth_weight", &o.depth_weight},
+      {"odometry", "blur_scale_px", &o.blur_scale_px},
+      {"odometry", "exposure", &o.exposure},
       {"odometry", "min_depth", &o.min_depth},
       {"odometry", "max_depth", &o.max_depth},
       {"odometry", "max_depth_slope", &o.max_depth_slope},

@@ -60,10 +60,19 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   return record;
 }
 
+double FrameTracker::angular_rate() const {
+  if (last_poses_.size() < 2) return 0;
+  const double step = last_times_.back() - last_times_.front();
+  if (!(step > 0)) return 0;
+  return Eigen::AngleAxisd((last_poses_.front().inverse() * last_poses_.back()).linear()).angle() / step;
+}
+
 bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_world_reference,
                          const Eigen::Isometry3d& guess, FrameRecord& record) const {
+  tracking::OdometryConfig odometry = config_.odometry;
+  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_rate());
   const tracking::OdometryResult r =
-      tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, config_.odometry);
+      tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry);
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
   record.tracked = r.converged;
   record.reason = r.reason;

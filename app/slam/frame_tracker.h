@@ -86,6 +86,8 @@ class FrameTracker {
   };
   // The constant-velocity guess for a frame at `timestamp`.
   Eigen::Isometry3d predict(double timestamp) const;
+  // The camera's angular rate (rad/s) over the last two tracked poses; 0 before there are two.
+  double angular_rate() const;
   // Odometry against `reference` from `guess` (world poses); fills the record's pose and result.
   bool align(const Reference& reference, const Eigen::Isometry3d& T_world_reference, const Eigen::Isometry3d& guess,
              FrameRecord& record) const;

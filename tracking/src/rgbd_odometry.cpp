@@ -24,6 +24,8 @@ void OdometryConfig::validate(const std::string& prefix) const {
   check.positive("depth_noise", depth_noise);
   check.positive("t_dof", t_dof);
   check.at_least("depth_weight", depth_weight, 0.0);
+  check.at_least("blur_scale_px", blur_scale_px, 0.0);
+  check.at_least("exposure", exposure, 0.0);
   check.positive("min_depth", min_depth);
   check.positive("max_depth_slope", max_depth_slope);
   if (!(max_depth > min_depth)) check.fail("max_depth", "a number > min_depth", max_depth);
@@ -268,6 +270,13 @@ OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig
     finest_first.push_back(std::move(l));
   }
   levels_.assign(std::make_move_iterator(finest_first.rbegin()), std::make_move_iterator(finest_first.rend()));
+}
+
+double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double angular_rate) {
+  if (!(config.blur_scale_px > 0) || !(angular_rate > 0) || current.levels().empty()) return config.depth_weight;
+  const double blur = current.levels().back().fx * angular_rate * config.exposure;
+  const double ratio = std::min(blur / config.blur_scale_px, 1e3);  // a wild rate is still a finite weight
+  return config.depth_weight * (1 + ratio * ratio);
 }
 
 OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& current,

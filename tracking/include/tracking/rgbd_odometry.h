@@ -27,7 +27,14 @@ struct OdometryConfig {
   // objects, unregistered colour) lose weight.
   double depth_noise = 0.0015;  // metres at 1 m (Kinect-class: ~1.5 mm at 1 m, ~2.4 cm at 4 m)
   double t_dof = 5;
-  double depth_weight = 1.0;  // relative to the photometric term
+  // Depth relative to the photometric term on a sharp frame. Colour is the more precise of the
+  // two there, but motion blur makes it lie and then depth is what holds: where the tracker knows
+  // the camera's angular rate (blur_aware_depth_weight), the weight grows as
+  // depth_weight * (1 + (blur / blur_scale_px)^2), blur = the finest level's focal * rate *
+  // exposure in pixels (docs/tuning.md: measured on both real and five generated sequences).
+  double depth_weight = 0.2;
+  double blur_scale_px = 2.5;  // 0: the weight stays depth_weight whatever the motion
+  double exposure = 1.0 / 60;  // seconds: a Kinect-class colour camera indoors
   double min_depth = 0.1, max_depth = 8.0;  // metres: measurements outside are ignored
   // Reference points are taken away from depth edges (depth changing by more than this fraction
   // per pixel) and holes: tracking_bench, teddy 0.79 -> 0.47 cm, 7-Scenes 3.06 -> 2.67 cm; at
@@ -79,6 +86,9 @@ struct OdometryResult {
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   double intensity_scale = 0, depth_scale = 0;  // the t-distribution scales at the end
 };
+
+// The depth weight for aligning `current` while the camera turns at `angular_rate` rad/s.
+double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double angular_rate);
 
 // Aligns `current` to `reference` starting from `initial_T_cur_ref`. A bad alignment is reported
 // in the result, never thrown; mismatched pyramids throw splat::Error.
