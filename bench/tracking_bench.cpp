@@ -15,6 +15,7 @@
 #include "commands/evaluation.h"
 #include "datasets/dataset.h"
 #include "io/slam_config_io.h"
+#include "tracking/exposure_estimate.h"
 #include "tracking/rgbd_odometry.h"
 
 namespace {
@@ -45,11 +46,11 @@ int main(int argc, char** argv) {
       {"TUM fr3/teddy", "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy"},
       {"7-Scenes redkitchen", "sevenscenes_redkitchen_first200"},
   };
-  std::printf("| sequence | frames | median ms | p95 ms | prepare ms (median) | odometry ATE | failures |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("| sequence | frames | median ms | p95 ms | prepare ms (median) | odometry ATE | failures | exposure measured |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Sequence& s : sequences) {
     if (!std::filesystem::exists(root / s.path)) {
-      std::printf("| %s | skipped: %s not found | | | | | |\n", s.name, (root / s.path).c_str());
+      std::printf("| %s | skipped: %s not found | | | | | | |\n", s.name, (root / s.path).c_str());
       continue;
     }
     app::DatasetOptions options;
@@ -62,7 +63,9 @@ int main(int argc, char** argv) {
     std::shared_ptr<const tracking::OdometryFrame> reference;
     Eigen::Isometry3d T_world_ref = Eigen::Isometry3d::Identity(), T_world_cur = T_world_ref, velocity = T_world_ref;
     int since_keyframe = 0, failures = 0;
-    double velocity_dt = 0, last_tracked_time = frames.empty() ? 0 : frames[0].timestamp;
+    double last_tracked_time = frames.empty() ? 0 : frames[0].timestamp;
+    Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
+    tracking::ExposureEstimate exposure(config.odometry);
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const auto start = std::chrono::steady_clock::now();
       auto prepared = std::make_shared<const tracking::OdometryFrame>(frames[i], config.odometry);
@@ -72,16 +75,19 @@ int main(int argc, char** argv) {
         const Eigen::Isometry3d guess = T_world_cur * velocity;
         // The weighting the SLAM system uses: from the angular rate of the last tracked step.
         tracking::OdometryConfig odometry = config.odometry;
-        const double rate = velocity_dt > 0 ? Eigen::AngleAxisd(velocity.linear()).angle() / velocity_dt : 0;
-        odometry.depth_weight = tracking::blur_aware_depth_weight(config.odometry, *prepared, rate);
+        odometry.exposure = exposure.exposure();
+        odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *prepared, angular_velocity.norm());
         const tracking::OdometryResult r =
             tracking::align_rgbd(*reference, *prepared, guess.inverse() * T_world_ref, odometry);
         failures += r.converged ? 0 : 1;
         const Eigen::Isometry3d next = T_world_ref * r.T_cur_ref.inverse();
         if (r.converged) {
           velocity = T_world_cur.inverse() * next, T_world_cur = next;
-          velocity_dt = frames[i].timestamp - last_tracked_time;
+          const double dt = frames[i].timestamp - last_tracked_time;
+          const Eigen::AngleAxisd turn(velocity.linear());
+          angular_velocity = dt > 0 ? Eigen::Vector3d(turn.axis() * (turn.angle() / dt)) : Eigen::Vector3d::Zero();
           last_tracked_time = frames[i].timestamp;
+          exposure.observe(*prepared, angular_velocity);
         }
         keyframe = r.converged && (++since_keyframe >= config.keyframe_every || r.overlap < config.keyframe_overlap);
       }
@@ -93,8 +99,8 @@ int main(int argc, char** argv) {
       if (dataset.entries[i].T_world_cam_truth) truth.push_back({frames[i].timestamp, *dataset.entries[i].T_world_cam_truth});
     }
     const app::TrajectoryErrors e = app::evaluate_trajectory(estimate, truth);
-    std::printf("| %s | %zu | %.1f | %.1f | %.1f | %.2f cm | %d |\n", s.name, frames.size(), percentile(total_ms, 0.5),
-                percentile(total_ms, 0.95), percentile(prepare_ms, 0.5), e.ate_rmse * 100, failures);
+    std::printf("| %s | %zu | %.1f | %.1f | %.1f | %.2f cm | %d | 1/%.0f s |\n", s.name, frames.size(), percentile(total_ms, 0.5),
+                percentile(total_ms, 0.95), percentile(prepare_ms, 0.5), e.ate_rmse * 100, failures, 1 / exposure.exposure());
   }
   return 0;
 }

@@ -12,7 +12,7 @@
 namespace app {
 
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
-    : rasterizer_(rasterizer), config_(config) {}
+    : rasterizer_(rasterizer), config_(config), exposure_(config_.odometry) {}
 
 void FrameTracker::start(const splat::RgbdFrame& frame) {
   last_poses_ = {Eigen::Isometry3d::Identity()};
@@ -55,22 +55,25 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   if (record.tracked) {
     last_poses_ = {last_poses_.back(), record.T_world_cam};
     last_times_ = {last_times_.back(), frame.timestamp};
+    if (config_.front_end == "odometry") exposure_.observe(*last_prepared_, angular_velocity());
   }
   ++since_keyframe_;
   return record;
 }
 
-double FrameTracker::angular_rate() const {
-  if (last_poses_.size() < 2) return 0;
+Eigen::Vector3d FrameTracker::angular_velocity() const {
+  if (last_poses_.size() < 2) return Eigen::Vector3d::Zero();
   const double step = last_times_.back() - last_times_.front();
-  if (!(step > 0)) return 0;
-  return Eigen::AngleAxisd((last_poses_.front().inverse() * last_poses_.back()).linear()).angle() / step;
+  if (!(step > 0)) return Eigen::Vector3d::Zero();
+  const Eigen::AngleAxisd turn((last_poses_.front().inverse() * last_poses_.back()).linear());
+  return turn.axis() * (turn.angle() / step);
 }
 
 bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_world_reference,
                          const Eigen::Isometry3d& guess, FrameRecord& record) const {
   tracking::OdometryConfig odometry = config_.odometry;
-  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_rate());
+  odometry.exposure = exposure_.exposure();
+  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm());
   const tracking::OdometryResult r =
       tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry);
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
@@ -173,7 +176,13 @@ void FrameTracker::correct(const Eigen::Isometry3d& world_correction) {
 }
 
 FrameTracker::State FrameTracker::state() const {
-  State s{last_poses_, last_times_, last_keyframe_, since_keyframe_, {}, {residual_scales_.begin(), residual_scales_.end()}};
+  State s{last_poses_,
+          last_times_,
+          last_keyframe_,
+          since_keyframe_,
+          {},
+          {residual_scales_.begin(), residual_scales_.end()},
+          exposure_.samples()};
   for (const Reference& r : references_) s.references.push_back(r.keyframe);
   return s;
 }
@@ -197,6 +206,7 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   since_keyframe_ = s.since_keyframe;
   references_ = std::move(references);
   residual_scales_.assign(s.residual_scales.begin(), s.residual_scales.end());
+  exposure_.restore(s.exposure_samples);
   last_prepared_.reset();  // set by the next track() before anything reads it
 }
 

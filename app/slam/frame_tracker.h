@@ -4,6 +4,7 @@
 //   depth (tracking/rgbd_odometry.h); its cost does not depend on the map.
 // - render: Levenberg-Marquardt through the rasterizer against the map (tracking/tracker.h).
 #pragma once
+#include <array>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -16,6 +17,7 @@
 #include "splat/gaussians.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
+#include "tracking/exposure_estimate.h"
 #include "tracking/rgbd_odometry.h"
 
 namespace app {
@@ -73,6 +75,7 @@ class FrameTracker {
     int since_keyframe = 0;
     std::vector<std::size_t> references;  // odometry: reference keyframe numbers, newest first
     std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
+    std::vector<std::array<double, 2>> exposure_samples;  // tracking::ExposureEstimate::samples()
   };
   State state() const;
   // Continues from `state`: `keyframe(number)` gives that keyframe's frame. Throws splat::Error
@@ -86,8 +89,9 @@ class FrameTracker {
   };
   // The constant-velocity guess for a frame at `timestamp`.
   Eigen::Isometry3d predict(double timestamp) const;
-  // The camera's angular rate (rad/s) over the last two tracked poses; 0 before there are two.
-  double angular_rate() const;
+  // The camera's angular velocity (rad/s, camera axes) over the last two tracked poses; zero
+  // before there are two.
+  Eigen::Vector3d angular_velocity() const;
   // Odometry against `reference` from `guess` (world poses); fills the record's pose and result.
   bool align(const Reference& reference, const Eigen::Isometry3d& T_world_reference, const Eigen::Isometry3d& guess,
              FrameRecord& record) const;
@@ -107,6 +111,7 @@ class FrameTracker {
   std::shared_ptr<const tracking::OdometryFrame> last_prepared_;
   std::deque<Reference> references_;
   std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
+  tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
 };
 
 }  // namespace app

@@ -26,6 +26,8 @@ void OdometryConfig::validate(const std::string& prefix) const {
   check.at_least("depth_weight", depth_weight, 0.0);
   check.at_least("blur_scale_px", blur_scale_px, 0.0);
   check.at_least("exposure", exposure, 0.0);
+  check.positive("fade_per_blur_px", fade_per_blur_px);
+  check.in_range("exposure_window", exposure_window, 2, 100000);
   check.positive("min_depth", min_depth);
   check.positive("max_depth_slope", max_depth_slope);
   if (!(max_depth > min_depth)) check.fail("max_depth", "a number > min_depth", max_depth);

@@ -35,6 +35,13 @@ struct OdometryConfig {
   double depth_weight = 0.2;
   double blur_scale_px = 2.5;  // 0: the weight stays depth_weight whatever the motion
   double exposure = 1.0 / 60;  // seconds: a Kinect-class colour camera indoors
+  // The SLAM system measures the exposure from the frames (exposure_estimate.h), with
+  // `exposure` as the prior and unit: fade_per_blur_px is how fast frames lose gradient along
+  // their motion per pixel of blur at `exposure` (the generator's sequences at 1/60 s), over
+  // the last exposure_window tracked frames.
+  bool estimate_exposure = true;
+  double fade_per_blur_px = 0.2;
+  int exposure_window = 150;
   double min_depth = 0.1, max_depth = 8.0;  // metres: measurements outside are ignored
   // Reference points are taken away from depth edges (depth changing by more than this fraction
   // per pixel) and holes: tracking_bench, teddy 0.79 -> 0.47 cm, 7-Scenes 3.06 -> 2.67 cm; at
