@@ -5,6 +5,7 @@
 //   tracking_bench [--config slam.json] [--frames N]
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
     int since_keyframe = 0, failures = 0;
     double last_tracked_time = frames.empty() ? 0 : frames[0].timestamp;
     Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
+    double reference_rate = 0;
     tracking::ExposureEstimate exposure(config.odometry);
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const auto start = std::chrono::steady_clock::now();
@@ -76,7 +78,8 @@ int main(int argc, char** argv) {
         // The weighting the SLAM system uses: from the angular rate of the last tracked step.
         tracking::OdometryConfig odometry = config.odometry;
         odometry.exposure = exposure.exposure();
-        odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *prepared, angular_velocity.norm());
+        odometry.depth_weight =
+            tracking::blur_aware_depth_weight(odometry, *prepared, std::hypot(angular_velocity.norm(), reference_rate));
         const tracking::OdometryResult r =
             tracking::align_rgbd(*reference, *prepared, guess.inverse() * T_world_ref, odometry);
         failures += r.converged ? 0 : 1;
@@ -92,7 +95,7 @@ int main(int argc, char** argv) {
         keyframe = r.converged && (++since_keyframe >= config.keyframe_every || r.overlap < config.keyframe_overlap);
       }
       const auto end = std::chrono::steady_clock::now();
-      if (keyframe) reference = prepared, T_world_ref = T_world_cur, since_keyframe = 0;
+      if (keyframe) reference = prepared, T_world_ref = T_world_cur, since_keyframe = 0, reference_rate = angular_velocity.norm();
       total_ms.push_back(std::chrono::duration<double, std::milli>(end - start).count());
       prepare_ms.push_back(std::chrono::duration<double, std::milli>(prepared_at - start).count());
       estimate.push_back({frames[i].timestamp, T_world_cur});

@@ -38,13 +38,15 @@ std::vector<Eigen::Isometry3d> poses_from_json(const json& j) {
 json tracker_to_json(const FrameTracker::State& t) {
   return {{"last_poses", poses_to_json(t.last_poses)}, {"last_times", t.last_times},
           {"last_keyframe", pose_to_json(t.last_keyframe)}, {"since_keyframe", t.since_keyframe},
-          {"references", t.references}, {"residual_scales", t.residual_scales}, {"exposure_samples", t.exposure_samples}};
+          {"references", t.references}, {"reference_rates", t.reference_rates}, {"residual_scales", t.residual_scales},
+          {"exposure_samples", t.exposure_samples}};
 }
 
 FrameTracker::State tracker_from_json(const json& j) {
   return {poses_from_json(j.at("last_poses")), j.at("last_times").get<std::vector<double>>(),
           pose_from_json(j.at("last_keyframe")), j.at("since_keyframe").get<int>(),
-          j.at("references").get<std::vector<std::size_t>>(), j.at("residual_scales").get<std::vector<double>>(),
+          j.at("references").get<std::vector<std::size_t>>(), j.at("reference_rates").get<std::vector<double>>(),
+          j.at("residual_scales").get<std::vector<double>>(),
           j.at("exposure_samples").get<std::vector<std::array<double, 2>>>()};
 }
 

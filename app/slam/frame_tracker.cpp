@@ -73,7 +73,9 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
                          const Eigen::Isometry3d& guess, FrameRecord& record) const {
   tracking::OdometryConfig odometry = config_.odometry;
   odometry.exposure = exposure_.exposure();
-  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm());
+  // Either frame's blur breaks brightness constancy: the reference's rate counts as the current's.
+  const double rate = std::hypot(angular_velocity().norm(), reference.angular_rate);
+  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, rate);
   const tracking::OdometryResult r =
       tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry);
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
@@ -161,7 +163,7 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   last_keyframe_ = record.T_world_cam;
   since_keyframe_ = 0;
   if (config_.front_end != "odometry") return;
-  references_.push_front({last_prepared_, number});
+  references_.push_front({last_prepared_, number, angular_velocity().norm()});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
 }
 
@@ -181,9 +183,10 @@ FrameTracker::State FrameTracker::state() const {
           last_keyframe_,
           since_keyframe_,
           {},
+          {},
           {residual_scales_.begin(), residual_scales_.end()},
           exposure_.samples()};
-  for (const Reference& r : references_) s.references.push_back(r.keyframe);
+  for (const Reference& r : references_) s.references.push_back(r.keyframe), s.reference_rates.push_back(r.angular_rate);
   return s;
 }
 
@@ -191,14 +194,17 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   const bool odometry = config_.front_end == "odometry";
   if (s.last_poses.size() > 2 || s.last_times.size() != s.last_poses.size() ||
       s.references.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1 ||
+      s.reference_rates.size() != s.references.size() ||
+      !std::all_of(s.reference_rates.begin(), s.reference_rates.end(), [](double r) { return r >= 0 && std::isfinite(r); }) ||
       (odometry && s.references.empty() != s.last_poses.empty()) || (!odometry && !s.references.empty())) {
     throw splat::Error("FrameTracker::restore: " + std::to_string(s.last_poses.size()) + " poses, " +
                        std::to_string(s.last_times.size()) + " times and " + std::to_string(s.references.size()) +
                        " references do not fit front end " + config_.front_end);
   }
   std::deque<Reference> references;
-  for (std::size_t number : s.references) {
-    references.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(number), config_.odometry), number});
+  for (std::size_t k = 0; k < s.references.size(); ++k) {
+    references.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(s.references[k]), config_.odometry),
+                          s.references[k], s.reference_rates[k]});
   }
   last_poses_ = s.last_poses;
   last_times_ = s.last_times;

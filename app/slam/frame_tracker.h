@@ -74,6 +74,7 @@ class FrameTracker {
     Eigen::Isometry3d last_keyframe = Eigen::Isometry3d::Identity();
     int since_keyframe = 0;
     std::vector<std::size_t> references;  // odometry: reference keyframe numbers, newest first
+    std::vector<double> reference_rates;  // and their angular rates
     std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
     std::vector<std::array<double, 2>> exposure_samples;  // tracking::ExposureEstimate::samples()
   };
@@ -86,6 +87,7 @@ class FrameTracker {
   struct Reference {
     std::shared_ptr<const tracking::OdometryFrame> frame;
     std::size_t keyframe;
+    double angular_rate = 0;  // rad/s when it was taken: its own motion blur
   };
   // The constant-velocity guess for a frame at `timestamp`.
   Eigen::Isometry3d predict(double timestamp) const;
