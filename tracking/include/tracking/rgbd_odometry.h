@@ -31,7 +31,7 @@ struct OdometryConfig {
   // two there, but motion blur makes it lie and then depth is what holds: where the tracker knows
   // the camera's angular rate (blur_aware_depth_weight), the weight grows as
   // depth_weight * (1 + (blur / blur_scale_px)^2), blur = the finest level's focal * rate *
-  // exposure in pixels (docs/tuning.md: measured on both real and five generated sequences).
+  // exposure in pixels (docs/tuning.md: measured on both real and six generated sequences).
   double depth_weight = 0.2;
   double blur_scale_px = 2.5;  // 0: the weight stays depth_weight whatever the motion
   double exposure = 1.0 / 60;  // seconds: a Kinect-class colour camera indoors
