@@ -5,7 +5,6 @@
 //   tracking_bench [--config slam.json] [--frames N]
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -79,7 +78,7 @@ int main(int argc, char** argv) {
         tracking::OdometryConfig odometry = config.odometry;
         odometry.exposure = exposure.exposure();
         odometry.depth_weight =
-            tracking::blur_aware_depth_weight(odometry, *prepared, std::hypot(angular_velocity.norm(), reference_rate));
+            tracking::blur_aware_depth_weight(odometry, *prepared, angular_velocity.norm(), reference_rate);
         const tracking::OdometryResult r =
             tracking::align_rgbd(*reference, *prepared, guess.inverse() * T_world_ref, odometry);
         failures += r.converged ? 0 : 1;

@@ -73,9 +73,8 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
                          const Eigen::Isometry3d& guess, FrameRecord& record) const {
   tracking::OdometryConfig odometry = config_.odometry;
   odometry.exposure = exposure_.exposure();
-  // Either frame's blur breaks brightness constancy: the reference's rate counts as the current's.
-  const double rate = std::hypot(angular_velocity().norm(), reference.angular_rate);
-  odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *last_prepared_, rate);
+  odometry.depth_weight =
+      tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm(), reference.angular_rate);
   const tracking::OdometryResult r =
       tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry);
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();

@@ -353,8 +353,9 @@ TEST(SlamSystem, ThreadedModeRefusesTheTrackingRasterizerForMapping) {
 namespace {
 
 // Measured 0.59 cm with the odometry front end (the test prints it; 0.80 before the depth
-// weight followed the predicted blur, 0.97 before points at depth edges were left out). The bound allows for other compilers' rounding and stays far below what
-// a lost or drifting frame costs (centimetres to metres).
+// weight followed the predicted blur, 0.97 before points at depth edges were left out). The
+// bound allows for other compilers' rounding and stays far below what a lost or drifting frame
+// costs (centimetres to metres).
 constexpr double kHardMotionAteBound = 0.015;
 
 // The generator's hard case (tracking/ issue: fast rotation peaking at 2.2 rad/s, motion blur,

@@ -94,13 +94,13 @@ TEST(RgbdOdometry, DepthWeightGrowsWithThePredictedBlur) {
   const tracking::OdometryFrame frame(d.load(0), config);
   const double focal = frame.levels().back().fx;  // finest level
   const double doubling_rate = config.blur_scale_px / (focal * config.exposure);
-  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, 0), config.depth_weight);
-  EXPECT_NEAR(tracking::blur_aware_depth_weight(config, frame, doubling_rate), 2 * config.depth_weight, 1e-12);
-  EXPECT_NEAR(tracking::blur_aware_depth_weight(config, frame, 3 * doubling_rate), 10 * config.depth_weight, 1e-12);
-  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, std::nan("")), config.depth_weight);
-  EXPECT_TRUE(std::isfinite(tracking::blur_aware_depth_weight(config, frame, 1e300)));
+  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, 0, 0), config.depth_weight);
+  EXPECT_NEAR(tracking::blur_aware_depth_weight(config, frame, doubling_rate, 0), 2 * config.depth_weight, 1e-12);
+  EXPECT_NEAR(tracking::blur_aware_depth_weight(config, frame, 3 * doubling_rate, 0), 10 * config.depth_weight, 1e-12);
+  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, std::nan(""), 0), config.depth_weight);
+  EXPECT_TRUE(std::isfinite(tracking::blur_aware_depth_weight(config, frame, 1e300, 0)));
   config.blur_scale_px = 0;
-  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, doubling_rate), config.depth_weight) << "0 turns it off";
+  EXPECT_EQ(tracking::blur_aware_depth_weight(config, frame, doubling_rate, 0), config.depth_weight) << "0 turns it off";
 }
 
 // Why the weight grows: a camera turning at up to 3 rad/s with a 1/30 s exposure smears the
@@ -122,7 +122,7 @@ TEST(RgbdOdometry, BlurAwareDepthWeightAlignsBlurredFramesBetter) {
     const Eigen::Isometry3d truth = true_motion(d, i - 1, i);
     const double rate = Eigen::AngleAxisd(truth.linear()).angle() * o.fps;
     tracking::OdometryConfig aware = config;
-    aware.depth_weight = tracking::blur_aware_depth_weight(config, cur, rate);
+    aware.depth_weight = tracking::blur_aware_depth_weight(config, cur, rate, 0);
     peak_weight = std::max(peak_weight, aware.depth_weight);
     sharp_error += pose_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), config).T_cur_ref, truth).translation_m;
     aware_error += pose_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), aware).T_cur_ref, truth).translation_m;

@@ -274,7 +274,9 @@ OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig
   levels_.assign(std::make_move_iterator(finest_first.rbegin()), std::make_move_iterator(finest_first.rend()));
 }
 
-double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double angular_rate) {
+double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double current_rate,
+                               double reference_rate) {
+  const double angular_rate = std::hypot(current_rate, reference_rate);
   if (!(config.blur_scale_px > 0) || !(angular_rate > 0) || current.levels().empty()) return config.depth_weight;
   const double blur = current.levels().back().fx * angular_rate * config.exposure;
   const double ratio = std::min(blur / config.blur_scale_px, 1e3);  // a wild rate is still a finite weight

@@ -94,8 +94,11 @@ struct OdometryResult {
   double intensity_scale = 0, depth_scale = 0;  // the t-distribution scales at the end
 };
 
-// The depth weight for aligning `current` while the camera turns at `angular_rate` rad/s.
-double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double angular_rate);
+// The depth weight for aligning `current`, taken while the camera turned at `current_rate`
+// rad/s, against a reference taken at `reference_rate`: either frame's blur breaks brightness
+// constancy, so the two rates count together (their hypotenuse).
+double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double current_rate,
+                               double reference_rate);
 
 // Aligns `current` to `reference` starting from `initial_T_cur_ref`. A bad alignment is reported
 // in the result, never thrown; mismatched pyramids throw splat::Error.
