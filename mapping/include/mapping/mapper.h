@@ -39,9 +39,10 @@ struct MapperConfig {
   // repeated sweeps degraded the render.
   double refine_learning_rate_scale = 0.5;
   // Pose steps in the final refinement (Adam on se(3), metres and radians); 0 keeps each
-  // refined frame where tracking and mapping put it. These the poses agree with the final map
-  // (teddy ATE 1.23 -> 0.98 cm at the same PSNR, with the render front end).
-  double refine_pose_learning_rate = 2e-3, refine_pose_rotation_learning_rate = 5e-4;
+  // refined frame where tracking and mapping put it. Moving them fits the map to each frame's
+  // view and not to the scene: with the odometry front end it made the trajectory worse on 7 of
+  // 8 sequences and held-out views 0.9 dB worse on both real ones (docs/tuning.md).
+  double refine_pose_learning_rate = 0, refine_pose_rotation_learning_rate = 0;
   // Adam's step for the camera's vignetting (k1, k2) in the final refinement; 0 leaves it at
   // none. Every step renders through the current vignetting (teddy: +0.5 dB as recorded).
   double refine_vignetting_rate = 2e-3;
