@@ -45,6 +45,21 @@ std::vector<app::FrameRecord> process_all(app::SlamSystem& slam, const app::Data
   return records;
 }
 
+// Every frame of `dataset` processed with `config` (their records), then the trajectory after
+// the final sweep.
+struct Swept {
+  std::vector<app::FrameRecord> records;
+  std::vector<Eigen::Isometry3d> refined;
+};
+Swept process_and_sweep(const app::Dataset& dataset, const app::SlamConfig& config) {
+  auto rasterizer = splat::make_cpu_rasterizer();
+  app::SlamSystem slam(*rasterizer, config);
+  Swept out{process_all(slam, dataset), {}};
+  slam.refine_map([&](std::size_t i) { return dataset.load(i); });
+  out.refined = slam.trajectory();
+  return out;
+}
+
 app::TrajectoryErrors reconstruct(const app::Dataset& dataset, std::size_t& failures) {
   auto rasterizer = splat::make_cpu_rasterizer();
   std::vector<app::StampedPose> truth;
@@ -129,14 +144,10 @@ TEST(SlamSystem, RealTeddySequencePrefixTrajectoryWithinOneCentimetre) {
 TEST(SlamSystem, RelocalizationAfterRefinementKeepsTheTrajectoryClose) {
   gslam::test::TempDir dir;
   const app::Dataset dataset = synthetic_dataset(dir, 10);
-  auto rasterizer = splat::make_cpu_rasterizer();
   app::SlamConfig config;
   config.refine_passes = 1;
   config.relocalize_iterations = 5;
-  app::SlamSystem slam(*rasterizer, config);
-  const std::vector<app::FrameRecord> records = process_all(slam, dataset);
-  slam.refine_map([&](std::size_t i) { return dataset.load(i); });
-  const std::vector<Eigen::Isometry3d> refined = slam.trajectory();
+  const auto [records, refined] = process_and_sweep(dataset, config);
   EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
   std::vector<app::StampedPose> estimate, truth;
   for (std::size_t i = 0; i < records.size(); ++i) {
@@ -225,20 +236,15 @@ TEST(SlamSystem, FinalRefinementRaisesRenderQualityOverTheSequence) {
 TEST(SlamSystem, FinalRefinementMovesPosesWhereAsked) {
   gslam::test::TempDir dir;
   const app::Dataset dataset = synthetic_dataset(dir, 6);
-  auto rasterizer = splat::make_cpu_rasterizer();
   app::SlamConfig config;
   config.refine_passes = 2;
   config.mapping.refine_pose_learning_rate = 2e-3;
   config.mapping.refine_pose_rotation_learning_rate = 5e-4;
-  app::SlamSystem slam(*rasterizer, config);
-  process_all(slam, dataset);
-  const std::vector<Eigen::Isometry3d> before = slam.trajectory();
-  slam.refine_map([&](std::size_t i) { return dataset.load(i); });
-  const std::vector<Eigen::Isometry3d> after = slam.trajectory();
-  ASSERT_EQ(after.size(), before.size());
-  EXPECT_TRUE(after[0].isApprox(before[0], 0));
-  for (std::size_t i = 1; i < after.size(); ++i) {
-    EXPECT_GT((after[i].translation() - before[i].translation()).norm(), 1e-5) << "frame " << i;
+  const auto [records, refined] = process_and_sweep(dataset, config);
+  ASSERT_EQ(refined.size(), records.size());
+  EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
+  for (std::size_t i = 1; i < refined.size(); ++i) {
+    EXPECT_GT((refined[i].translation() - records[i].T_world_cam.translation()).norm(), 1e-5) << "frame " << i;
   }
 }
 
