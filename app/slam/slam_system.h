@@ -93,8 +93,9 @@ class SlamSystem {
   // same on every run; the first passes densify (refine_densify_passes). Where
   // MapperConfig::refine_pose_learning_rate > 0 (off by default), visited frames but the first
   // (the world frame) move with the map, and trajectory() returns the moved poses. Then prunes,
-  // and re-tracks where relocalize_iterations > 0. Finishes mapping first. Calls visited(done, total) after each
-  // visit, and ends the sweep early (keeping what it did) once stop() returns true.
+  // and re-tracks where relocalize_iterations > 0. Finishes mapping first. Calls
+  // visited(done, total) after each visit, and ends the sweep early (keeping what it did) once
+  // stop() returns true.
   Refinement refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,
                         const std::function<void(std::size_t, std::size_t)>& visited = {},
                         const std::function<bool()>& stop = {});
