@@ -1,9 +1,20 @@
 # Every dependency is a Debian package; a missing one names the package to install.
+#
+# The packages' own find scripts print notes that read like errors and are not: Debian's Imath
+# config (pulled in by OpenEXR) lists its Python binding, whose library comes with python3-imath,
+# and prints a "does not exist" block without it; Ceres' SuiteSparse search prints a line per
+# library and "Could NOT find METIS", an optional ordering library that Debian's Ceres and gslam
+# do without. Their status messages are hidden here (the variable is function-scoped);
+# `cmake --log-level=STATUS` shows them. Warnings and errors still show.
+set(GSLAM_FOUND_PACKAGES "")
 function(gslam_require_package name apt_package)
+  set(CMAKE_MESSAGE_LOG_LEVEL NOTICE)
   find_package(${name} ${ARGN} QUIET)
   if(NOT ${name}_FOUND)
     message(FATAL_ERROR "gslam needs ${name}: apt-get install ${apt_package}")
   endif()
+  string(STRIP "${name} ${${name}_VERSION}" found)
+  set(GSLAM_FOUND_PACKAGES ${GSLAM_FOUND_PACKAGES} "${found}" PARENT_SCOPE)
 endfunction()
 
 gslam_require_package(Eigen3 libeigen3-dev NO_MODULE)
@@ -24,6 +35,9 @@ endif()
 if(GSLAM_BUILD_BENCHMARKS)
   gslam_require_package(benchmark libbenchmark-dev)
 endif()
+
+list(JOIN GSLAM_FOUND_PACKAGES ", " found)
+message(STATUS "Found ${found} (their find scripts' notes hidden: cmake --log-level=STATUS shows them)")
 
 # Vulkan backend: the loader headers (libvulkan-dev) and glslang (glslang-tools). Without
 # them the build goes on CPU-only, with a warning.

@@ -1,6 +1,7 @@
 #include "commands/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -8,8 +9,11 @@
 
 #include "commands/eval_command.h"
 #include "commands/live_command.h"
+#include "commands/nearest_name.h"
 #include "commands/reconstruct_command.h"
 #include "commands/render_command.h"
+#include "commands/version.h"
+#include "commands/view_command.h"
 #include "viewer/views.h"
 
 namespace app {
@@ -35,11 +39,49 @@ void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->check(CLI::Range(0, 256))->capture_default_str();
 }
 
+// The long names of a command's options ("--max-frames").
+std::vector<std::string> option_names(const CLI::App& cmd) {
+  std::vector<std::string> names;
+  for (const CLI::Option* option : cmd.get_options()) {
+    for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+  }
+  return names;
+}
+
+// A command line CLI11 refused, as one line that names the mistake and, for a mistyped name,
+// the nearest one there is.
+std::string describe_parse_error(const CLI::App& cli, const CLI::ParseError& e) {
+  const CLI::App* cmd = nullptr;
+  for (const CLI::App* sub : cli.get_subcommands({})) {
+    if (sub->parsed()) cmd = sub;
+  }
+  if (!cmd && cli.remaining().empty()) {
+    std::string commands;
+    for (const CLI::App* sub : cli.get_subcommands({})) commands += (commands.empty() ? "" : ", ") + sub->get_name();
+    return "give a command: " + commands + " (gslam --help describes them)";
+  }
+  const CLI::App& in = cmd ? *cmd : cli;
+  const std::string where = cmd ? "gslam " + cmd->get_name() : "gslam";
+  std::vector<std::string> extras = in.remaining();
+  if (cmd) {
+    for (const std::string& arg : cli.remaining()) extras.push_back(arg);
+  }
+  for (const std::string& arg : extras) {
+    if (arg.size() < 2 || arg[0] != '-') continue;
+    const std::string name = arg.substr(0, arg.find('='));
+    const std::optional<std::string> near = nearest_name(name, option_names(in));
+    return where + ": unknown option '" + name + "'" + (near ? "; did you mean '" + *near + "'?" : "") + " (" + where +
+           " --help lists them)";
+  }
+  return where + ": " + e.what();
+}
+
 }  // namespace
 
 int run_cli(int argc, char** argv) {
   CLI::App cli{"gslam: 3D Gaussian Splatting SLAM"};
   cli.require_subcommand(1);
+  cli.set_version_flag("--version", version_text(), "Print the version, the git commit and the backends built in");
 
   RenderOptions render;
   CLI::App* render_cmd = cli.add_subcommand(
@@ -48,8 +90,10 @@ int run_cli(int argc, char** argv) {
   render_cmd->add_option("--out", render.out, "Output directory")->required();
   auto* trajectory = render_cmd->add_option("--trajectory", render.trajectory, "TUM trajectory (camera to world)");
   render_cmd->add_option("--intrinsics", render.intrinsics, "fx,fy,cx,cy,W,H of the cameras");
-  render_cmd->add_option("--path", render.path, "Along camera poses: novel (a smooth path near them) or recorded (at them)")
-      ->check(CLI::IsMember({"novel", "recorded"}))->capture_default_str();
+  render_cmd->add_option("--path", render.path,
+                         "Along camera poses: recorded (at them; the default with --trajectory) or novel (a smooth path "
+                         "near them; the default for a run folder's own cameras)")
+      ->check(CLI::IsMember({"novel", "recorded"}));
   render_cmd->add_option("--views", render.views, "Views along a novel path (default: one per pose)")->check(CLI::Range(1, kMaxOrbitViews));
   render_cmd->add_option("--offset", render.offset, "Novel path offset in each camera's axes, metres (right, down, forward)")->capture_default_str();
   auto* orbit = render_cmd->add_option("--orbit", render.orbit, "Views on an orbit (default for a map without cameras: 36)");
@@ -59,11 +103,14 @@ int run_cli(int argc, char** argv) {
   render_cmd->add_option("--format", render.formats, "Comma-separated: png, exr, mp4 (H.264 video of the views)")->capture_default_str();
   render_cmd->add_option("--fps", render.fps, "Frame rate of the mp4")->check(CLI::Range(1.0, 240.0))->capture_default_str();
   render_cmd->add_option("--background", render.background, "Background RGB r,g,b in [0, 1]")->capture_default_str();
+  render_cmd->add_flag("--overwrite", render.overwrite, "Replace the views of an earlier render in --out");
   add_backend_options(*render_cmd, render.backend);
 
   ReconstructOptions recon;
   CLI::App* recon_cmd = cli.add_subcommand("reconstruct", "RGB-D SLAM: trajectory and Gaussian map from a sequence");
-  recon_cmd->add_option("dataset", recon.dataset, "TUM RGB-D folder (default: the bundled synthetic sequence)");
+  recon_cmd->add_option("dataset", recon.dataset,
+                        "Sequence folder: TUM RGB-D, Replica, or a plain rgb/ depth/ intrinsics.txt folder (README: "
+                        "bringing your own data); default: the bundled synthetic sequence");
   recon_cmd->add_option("--out", recon.out, "Output directory (required unless --print-config)");
   recon_cmd->add_flag("--overwrite", recon.overwrite, "Replace the outputs of another run in --out");
   recon_cmd->add_flag("--resume", recon.resume, "Continue the interrupted run in --out from its checkpoint");
@@ -105,8 +152,16 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_flag("--watch", live.watch, "Take frames written into SOURCE/rgb and SOURCE/depth as they appear");
   live_cmd->add_flag("--headless", live.headless, "No window (robots without a display)");
   live_cmd->add_flag("--overwrite", live.overwrite, "Replace the outputs of another run in --out");
-  live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")->capture_default_str();
-  live_cmd->add_option("--max-frames", live.dataset_options.max_frames, "Stop after tracking N frames");
+  auto* speed = live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")
+                    ->check(kPositiveFinite)->capture_default_str();
+  live_cmd->add_flag_callback("--every-frame", [&live] { live.speed = kEveryFrame; },
+                              "Replay every frame, each once the previous one is tracked (none dropped, no clock)")
+      ->excludes(speed);
+  live_cmd->add_flag("--no-catch-up{false}", live.catch_up,
+                     "At the end, write the outputs at once instead of first mapping the keyframes mapping skipped");
+  live_cmd->add_option("--max-frames", live.dataset_options.max_frames,
+                       "Replay only the first N frames of the recording (frames dropped among them count); with "
+                       "--watch, stop after N frames are tracked");
   live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
   live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   live_cmd->add_option("--idle-timeout", live.watch_options.idle_timeout, "--watch: seconds without frames that end the stream")->capture_default_str();
@@ -116,10 +171,33 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_option("--screenshot-after", live.screenshot_after, "Frames tracked before --screenshot");
   add_backend_options(*live_cmd, live.backend);
 
+  ViewOptions view;
+  CLI::App* view_cmd = cli.add_subcommand("view", "A window on a finished map and the cameras that made it (mouse and keys: README)");
+  view_cmd->add_option("map", view.path, "Map file (.ply 3DGS, .glb/.gltf KHR_gaussian_splatting) or a run folder")->required();
+  view_cmd->add_option("--screenshot", view.screenshot, "Save the first picture drawn to this PNG and exit");
+  view_cmd->add_option("--camera", view.camera, "Start at recorded camera N (0-based, a line of trajectory.txt)");
+  view_cmd->add_option("--up", view.up, "World up x,y,z (default: from the cameras and the floor, else 0,0,1)")
+      ->delimiter(',')->expected(3)->check(CLI::Number);
+  add_backend_options(*view_cmd, view.backend);
+
+  // A mistyped command: CLI11 would only say that one is required.
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : cli.get_subcommands({})) commands.push_back(sub->get_name());
+  if (argc > 1 && argv[1][0] != '-' && std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+    const std::optional<std::string> near = nearest_name(argv[1], commands);
+    throw splat::Error(std::string("unknown command '") + argv[1] + "'" + (near ? "; did you mean '" + *near + "'?" : "") +
+                       " (gslam --help lists them)");
+  }
   try {
     cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return cli.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return cli.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return cli.exit(e);
+  } catch (const CLI::ParseError& e) {
+    throw splat::Error(describe_parse_error(cli, e));
   }
   if (render_cmd->parsed()) return run_render(render);
   if (recon_cmd->parsed()) {
@@ -127,6 +205,7 @@ int run_cli(int argc, char** argv) {
     return run_reconstruct(recon);
   }
   if (eval_cmd->parsed()) return run_eval(eval);
+  if (view_cmd->parsed()) return run_view(view);
   if (live_cmd->parsed()) {
     if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
     if (!live.dataset_options.intrinsics.empty()) live.watch_options.intrinsics = live.dataset_options.intrinsics;

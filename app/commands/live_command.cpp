@@ -15,6 +15,7 @@
 #include "slam/slam_system.h"
 #include "viewer/live_view.h"
 #include "commands/progress.h"
+#include "commands/run_input.h"
 #include "commands/run_outputs.h"
 #include "io/slam_config_io.h"
 #include "viewer/viewer_window.h"
@@ -61,7 +62,8 @@ struct Shared {
   LiveViewState view;
   std::string stats = "gslam live: waiting for frames";
   std::size_t tracked = 0;
-  bool paused = false, snapshot = false, done = false;
+  bool paused = false, snapshot = false;
+  bool finished = false;  // the stream has ended and mapping has caught up: the map is final
   std::atomic<bool> stop{false};
 };
 
@@ -88,18 +90,23 @@ int run_live(const LiveOptions& o) {
   if (!o.headless) window = std::make_unique<ViewerWindow>("gslam live");
   auto view_rasterizer = splat::make_cpu_rasterizer({1});
   SlamSystem live(*tracking_rasterizer, *mapping_rasterizer, config);
+  // What the run read, as reconstruct records it, so that eval and render take a live run folder.
+  nlohmann::json input;
+  if (dataset) input = run_input_json(o.source, *dataset, o.dataset_options.max_frames, 0, config);
   std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, o.watch_options)
                                                 : make_replay_source(std::move(*dataset), o.speed);
   std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
   RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer, o.overwrite);
+  if (!input.is_null()) outputs.extra()["input"] = input;
   Shared shared;
   LatencyWindow latency;
   std::vector<StampedPose> truth;
   std::size_t paused_dropped = 0;
   const std::size_t max_frames =
       o.dataset_options.max_frames > 0 ? std::size_t(o.dataset_options.max_frames) : 0;
-  // SIGINT/SIGTERM: the run stops taking frames and writes its outputs.
+  // SIGINT/SIGTERM: the run stops taking frames (and catching up) and writes its outputs.
   std::optional<InterruptGuard> interrupt(std::in_place);
+  const auto dropped = [&] { return source->dropped() + paused_dropped; };
 
   // Outputs with the poses as mapping has corrected them so far.
   auto checkpoint = [&] {
@@ -145,7 +152,7 @@ int run_live(const LiveOptions& o) {
                     "gslam live: %zu frames, %.1f frames/s, latency p95 %.0f ms, %zu Gaussians, "
                     "%zu dropped%s",
                     n, static_cast<double>(n) / std::max(1e-9, outputs.elapsed_seconds()),
-                    latency.percentile(0.95), record.gaussians, source->dropped() + paused_dropped,
+                    latency.percentile(0.95), record.gaussians, dropped(),
                     window && shared.paused ? ", paused" : "");
       {
         std::lock_guard lock(shared.mutex);
@@ -158,7 +165,7 @@ int run_live(const LiveOptions& o) {
       }
       progress.update(n, std::to_string(record.gaussians) + " Gaussians, latency p95 " +
                              std::to_string(static_cast<int>(latency.percentile(0.95))) + " ms, " +
-                             std::to_string(source->dropped() + paused_dropped) + " dropped");
+                             std::to_string(dropped()) + " dropped");
       if (std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >=
           o.checkpoint_seconds) {
         checkpoint();
@@ -167,21 +174,46 @@ int run_live(const LiveOptions& o) {
       if (max_frames > 0 && n >= max_frames) break;
     }
     progress.finish();
+  };
+  // After the stream: the source stops (its counts are final), mapping finishes and maps the
+  // keyframes it skipped, and the window is given the final map.
+  auto finish_mapping = [&] {
+    source->stop();
+    if (InterruptGuard::interrupted()) {
+      std::fprintf(stderr, "interrupted: writing what was done (no keyframe renders; gslam render RUN draws views)\n");
+    }
+    const std::size_t backlog = live.mapping_backlog();
+    if (backlog > 0 && o.catch_up && !InterruptGuard::interrupted()) {
+      Progress progress("catch-up", backlog, "skipped keyframes mapped");
+      live.catch_up_mapping(
+          [&](std::size_t done, std::size_t total) {
+            progress.update(done);
+            std::lock_guard lock(shared.mutex);
+            shared.view.map = live.map();
+            shared.stats = "gslam live: mapping skipped keyframes, " + std::to_string(done) + " of " + std::to_string(total);
+          },
+          [] { return InterruptGuard::interrupted(); });
+      progress.finish();
+    }
+    live.finish();
     std::lock_guard lock(shared.mutex);
-    shared.done = true;
+    shared.view.map = live.map();
+    shared.finished = true;
   };
 
   std::exception_ptr error;
   if (!window) {
     pipeline();
+    finish_mapping();
   } else {
     std::thread worker([&] {
       try {
         pipeline();
+        finish_mapping();
       } catch (...) {
         error = std::current_exception();
         std::lock_guard lock(shared.mutex);
-        shared.done = true;
+        shared.finished = true;
       }
     });
     bool screenshot_taken = false;
@@ -191,23 +223,23 @@ int run_live(const LiveOptions& o) {
       LiveViewState state;
       std::string title;
       std::size_t tracked = 0;
-      bool done = false;
+      bool finished = false;
       {
         std::lock_guard lock(shared.mutex);
         shared.paused = window->paused();
         state = shared.view;
         title = shared.stats;
         tracked = shared.tracked;
-        done = shared.done;
+        finished = shared.finished;
       }
       if (window->closed() || InterruptGuard::interrupted()) shared.stop = true;
-      const bool last = done || shared.stop;  // draw once more, then leave
-      // The screenshot once enough frames are tracked and mapping has published a map, or at
-      // the end if the stream was shorter.
+      if (window->closed()) break;  // the worker still finishes mapping and the outputs follow
+      // The screenshot once enough frames are tracked and mapping has drawn a map, or of the
+      // final map if the stream ended first.
       const bool has_map = state.map && !state.map->empty();
       const bool want_screenshot =
           !o.screenshot.empty() && !screenshot_taken &&
-          ((tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) && has_map) || last);
+          ((tracked >= static_cast<std::size_t>(std::max(1, o.screenshot_after)) && has_map) || finished);
       const bool want_snapshot = window->take_snapshot_request();
       splat::Image8 capture;
       window->show(compose_live_view(state, window->view(), *view_rasterizer), title,
@@ -224,35 +256,40 @@ int run_live(const LiveOptions& o) {
         std::lock_guard lock(shared.mutex);
         shared.snapshot = true;  // the pipeline writes map.ply, trajectory and summary
       }
-      if (last) break;
+      if (finished) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(30));
     }
     worker.join();
   }
   const bool interrupted = InterruptGuard::interrupted();
   interrupt.reset();
-  live.finish();
   if (error) std::rethrow_exception(error);
 
   const MappingTotals mapping = live.mapping_totals();
   outputs.update_poses(live.trajectory());
   outputs.set_mapping(mapping, live.loop_events());
+  if (input.is_null()) {  // a watched folder: its camera is known once frames came
+    outputs.extra()["input"] = run_input_json(o.source, "watched", source->intrinsics(), o.watch_options.depth_scale,
+                                              o.dataset_options.max_frames, 0, config);
+  }
   outputs.extra()["live"] = {{"source", source->describe()},
                              {"frames_received", source->delivered() + source->dropped()},
-                             {"frames_dropped", source->dropped() + paused_dropped},
+                             {"frames_dropped", dropped()},
                              {"frames_dropped_while_paused", paused_dropped},
                              {"tracking_latency_ms", {{"p50", latency.percentile(0.5)}, {"p95", latency.percentile(0.95)}}},
                              {"keyframes_mapped", mapping.keyframes_mapped},
+                             {"keyframes_caught_up", mapping.keyframes_caught_up},
                              {"keyframes_skipped", mapping.keyframes_skipped},
                              {"interrupted", interrupted}};
+  outputs.set_stopping(interrupted);
   const std::shared_ptr<const splat::Gaussians> map = live.map();
   const splat::Gaussians empty;
   outputs.finish(map ? *map : empty, live.keyframes(), *tracking_rasterizer, source->intrinsics(), truth);
   std::printf(
-      "live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu "
-      "skipped), %zu Gaussians -> %s\n",
-      outputs.records().size(), source->dropped() + paused_dropped, latency.percentile(0.95),
-      mapping.keyframes_mapped, mapping.keyframes_skipped, map ? map->size() : std::size_t(0), o.out.c_str());
+      "live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu caught up at the end, "
+      "%zu skipped), %zu Gaussians -> %s\n",
+      outputs.records().size(), dropped(), latency.percentile(0.95), mapping.keyframes_mapped,
+      mapping.keyframes_caught_up, mapping.keyframes_skipped, map ? map->size() : std::size_t(0), o.out.c_str());
   return 0;
 }
 

@@ -159,16 +159,29 @@ int run_reconstruct(const ReconstructOptions& o) {
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   outputs.set_mapping(slam.mapping_totals(), slam.loop_events());
-  outputs.extra()["interrupted"] = InterruptGuard::interrupted();
-  if (InterruptGuard::interrupted()) std::fprintf(stderr, "interrupted: writing what was done\n");
+  const bool interrupted = InterruptGuard::interrupted();
+  outputs.extra()["interrupted"] = interrupted;
+  outputs.set_resumable(interrupted);
+  outputs.set_stopping(interrupted);
+  const std::string resume = "gslam reconstruct --resume --out " + o.out.string();
+  if (interrupted) {
+    outputs.extra()["resume"] = resume;
+    std::fprintf(stderr, "interrupted: writing what was done (no keyframe renders)\n");
+  }
   std::vector<StampedPose> truth;
   for (const auto& e : dataset.entries) {
     if (e.T_world_cam_truth) truth.push_back({e.timestamp, *e.T_world_cam_truth});
   }
   const std::shared_ptr<const splat::Gaussians> map = slam.map();
   outputs.finish(*map, slam.keyframes(), *rasterizer, dataset.intrinsics, truth);
-  if (!InterruptGuard::interrupted()) std::filesystem::remove(o.out / kCheckpointFile);  // nothing to resume
+  if (!interrupted) std::filesystem::remove(o.out / kCheckpointFile);  // nothing to resume
   const std::size_t frames = outputs.records().size();
+  if (interrupted) {
+    std::printf("interrupted after %zu of %zu frames%s; outputs so far in %s; continue with: %s\n", frames,
+                dataset.entries.size(), frames == dataset.entries.size() ? " (in the final sweep)" : "", o.out.c_str(),
+                resume.c_str());
+    return 0;
+  }
   std::printf("reconstructed %zu frames (%zu keyframes, %zu tracking failures) into %zu Gaussians at %.2f frames/s -> %s\n",
               frames, slam.keyframes(), outputs.failures(), map->size(),
               static_cast<double>(frames) / outputs.elapsed_seconds(), o.out.c_str());

@@ -13,6 +13,7 @@
 #include "io/video_io.h"
 #include "io/map_io.h"
 #include "commands/progress.h"
+#include "commands/run_input.h"
 #include "io/trajectory.h"
 #include "viewer/views.h"
 #include "splat/error.h"
@@ -56,26 +57,21 @@ Formats parse_formats(const std::string& text) {
 // What to render: the map file, and the camera poses and intrinsics where there are any.
 struct Scene {
   std::filesystem::path map;
+  std::filesystem::path trajectory;
   std::vector<Eigen::Isometry3d> poses;
   std::optional<Intrinsics> camera;
 };
 
 Scene scene_of(const RenderOptions& o) {
-  Scene scene{o.map, {}, std::nullopt};
+  Scene scene{o.map, {}, {}, std::nullopt};
   std::filesystem::path trajectory = o.trajectory;
   if (std::filesystem::is_directory(o.map)) {  // a run folder
     scene.map = o.map / "map.ply";
     if (trajectory.empty()) trajectory = o.map / "trajectory.txt";
     if (o.intrinsics.empty()) {
       const std::filesystem::path summary_path = o.map / "summary.json";
-      std::ifstream in(summary_path);
-      if (!in) throw splat::Error(summary_path.string() + ": cannot open file (not a run folder?)");
-      const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
-      try {
-        const nlohmann::json& k = summary.at("input").at("intrinsics");
-        scene.camera = Intrinsics{k.at("fx").get<double>(), k.at("fy").get<double>(), k.at("cx").get<double>(),
-                                  k.at("cy").get<double>(), k.at("width").get<int>(), k.at("height").get<int>()};
-      } catch (const nlohmann::json::exception&) {
+      scene.camera = recorded_camera(summary_path);
+      if (!scene.camera) {
         throw splat::Error(summary_path.string() + ": records no camera (\"input\".intrinsics); give --intrinsics fx,fy,cx,cy,W,H");
       }
     }
@@ -85,35 +81,109 @@ Scene scene_of(const RenderOptions& o) {
     if (!scene.camera) throw splat::Error("render: --trajectory needs --intrinsics fx,fy,cx,cy,W,H");
     for (const auto& pose : read_tum_trajectory(trajectory)) scene.poses.push_back(pose.T_world_cam);
     if (scene.poses.empty()) throw splat::Error(trajectory.string() + ": the trajectory has no poses");
+    scene.trajectory = trajectory;
   }
   return scene;
 }
 
-std::vector<splat::Camera> views_of(const RenderOptions& o, const Scene& scene, const splat::Gaussians& map) {
+// The cameras to render, and a line saying which path they follow.
+struct Views {
   std::vector<splat::Camera> cameras;
+  std::string description;
+};
+
+// An orbit's up: --up, else the world_up of the summary.json beside the map (a run's map.ply or
+// map.glb, both in the run's world frame), else estimated from the poses there are
+// (estimate_world_up), else +z; and where it came from.
+struct OrbitUp {
+  Eigen::Vector3d up;
+  std::string source;
+};
+OrbitUp orbit_up(const RenderOptions& o, const Scene& scene, const splat::Gaussians& map) {
+  if (o.up) return {parse_vector3(*o.up, "up"), "--up"};
+  std::ifstream in(scene.map.parent_path() / "summary.json");
+  const nlohmann::json summary = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+  if (summary.is_object() && summary.contains("world_up")) {
+    const nlohmann::json& u = summary["world_up"];
+    try {
+      const Eigen::Vector3d up(u.at("x").get<double>(), u.at("y").get<double>(), u.at("z").get<double>());
+      if (up.allFinite() && up.norm() > 0) return {up.normalized(), "from summary.json world_up"};
+    } catch (const nlohmann::json::exception&) {  // malformed: estimated below, as for an older run
+    }
+  }
+  if (!scene.poses.empty()) {
+    const WorldUp up = estimate_world_up(scene.poses, map);
+    return {up.up, std::string("estimated from the camera poses: ") + up.source_name()};
+  }
+  return {Eigen::Vector3d::UnitZ(), "default; --up x,y,z sets it"};
+}
+
+Views views_of(const RenderOptions& o, const Scene& scene, const splat::Gaussians& map) {
+  Views v;
   if (o.orbit || scene.poses.empty()) {
     const int n = o.orbit.value_or(36);
-    if (!scene.poses.empty() && !o.up) return orbit_at_camera_height(map_extent(map), scene.poses, n, *scene.camera);
-    const auto [w, h] = scene.camera ? std::pair{scene.camera->width, scene.camera->height} : parse_size(o.size);
-    return orbit_cameras(map_extent(map), n, w, h, parse_vector3(o.up.value_or("0,0,1"), "up"));
+    v.description = "orbit: " + std::to_string(n) + " views about the map";
+    const OrbitUp up = orbit_up(o, scene, map);
+    if (!scene.poses.empty() && !o.up) {
+      v.cameras = orbit_at_camera_height(map_extent(map), scene.poses, n, *scene.camera, up.up);
+      v.description += " at the cameras' height";
+    } else {
+      const auto [w, h] = scene.camera ? std::pair{scene.camera->width, scene.camera->height} : parse_size(o.size);
+      v.cameras = orbit_cameras(map_extent(map), n, w, h, up.up);
+    }
+    char line[96];
+    std::snprintf(line, sizeof(line), "\norbit up: %.3f,%.3f,%.3f (", up.up.x(), up.up.y(), up.up.z());
+    v.description += line + up.source + ")";
+    return v;
   }
-  if (o.path == "recorded") {
-    for (const auto& T : scene.poses) cameras.push_back(make_camera(*scene.camera, T));
-  } else if (o.path == "novel") {
+  // A trajectory the user names is the path to render; a run's own cameras get a novel path.
+  const std::string path = !o.path.empty() ? o.path : o.trajectory.empty() ? "novel" : "recorded";
+  const std::string poses = std::to_string(scene.poses.size()) + " poses of " + scene.trajectory.string();
+  if (path == "recorded") {
+    for (const auto& T : scene.poses) v.cameras.push_back(make_camera(*scene.camera, T));
+    v.description = "path: recorded, at the " + poses;
+  } else if (path == "novel") {
     const int views = o.views > 0 ? o.views : static_cast<int>(std::min<std::size_t>(scene.poses.size(), kMaxOrbitViews));
     for (const auto& T : novel_path(scene.poses, views, parse_vector3(o.offset, "offset"))) {
-      cameras.push_back(make_camera(*scene.camera, T));
+      v.cameras.push_back(make_camera(*scene.camera, T));
     }
+    v.description = "path: novel, " + std::to_string(views) + " views near the " + poses + ", offset " + o.offset +
+                    " m (--path recorded renders at the poses)";
   } else {
     throw splat::Error("path '" + o.path + "': expected novel or recorded");
   }
-  return cameras;
+  return v;
+}
+
+// The files an earlier render left in `out` (its views and video).
+std::vector<std::filesystem::path> earlier_render_files(const std::filesystem::path& out) {
+  std::vector<std::filesystem::path> files;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(out, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string ext = entry.path().extension().string();
+    if (name == "render.mp4" || (name.rfind("view_", 0) == 0 && (ext == ".png" || ext == ".exr"))) {
+      files.push_back(entry.path());
+    }
+  }
+  return files;
+}
+
+// An `out` folder holds one render: an earlier one's views are refused unless `overwrite`.
+void refuse_earlier_render(const std::filesystem::path& out, bool overwrite) {
+  const std::vector<std::filesystem::path> earlier = earlier_render_files(out);
+  if (!earlier.empty() && !overwrite) {
+    throw splat::Error(out.string() + ": holds " + std::to_string(earlier.size()) +
+                       " files of an earlier render (view_NNNN, render.mp4); give --overwrite to replace them, or "
+                       "another --out");
+  }
 }
 
 }  // namespace
 
 int run_render(const RenderOptions& o) {
   const Formats formats = parse_formats(o.formats);
+  refuse_earlier_render(o.out, o.overwrite);
   splat::RenderSettings settings;
   const Eigen::Vector3d bg = parse_vector3(o.background, "background");
   for (int c = 0; c < 3; ++c) settings.background[static_cast<std::size_t>(c)] = static_cast<float>(bg[c]);
@@ -121,11 +191,14 @@ int run_render(const RenderOptions& o) {
   const Scene scene = scene_of(o);
   LoadedMap map = load_map(scene.map);
   for (const auto& notice : map.notices) std::fprintf(stderr, "notice: %s\n", notice.c_str());
-  const std::vector<splat::Camera> cameras = views_of(o, scene, map.gaussians);
+  const Views views = views_of(o, scene, map.gaussians);
+  const std::vector<splat::Camera>& cameras = views.cameras;
+  std::fprintf(stderr, "%s\n", views.description.c_str());
 
   std::string note;
   auto rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
+  for (const auto& file : earlier_render_files(o.out)) std::filesystem::remove(file);  // --overwrite
   std::filesystem::create_directories(o.out);
 
   double render_seconds = 0;

@@ -12,7 +12,9 @@ struct RenderOptions {
   std::filesystem::path out;
   std::filesystem::path trajectory;  // with intrinsics: camera poses for the views
   std::string intrinsics;            // fx,fy,cx,cy,W,H
-  std::string path = "novel";        // views along poses: "novel" (near them) or "recorded" (at them)
+  std::string path;                  // along poses: "recorded" (at them; the default with a
+                                     // trajectory given) or "novel" (near them; the default for
+                                     // a run folder's own cameras)
   int views = 0;                     // views along a novel path; 0: one per pose
   std::string offset = "0.1,-0.05,0";  // novel path: metres in each camera's axes (right, down, forward)
   std::optional<int> orbit;          // views on an orbit (the default, 36, for a map without poses)
@@ -22,14 +24,18 @@ struct RenderOptions {
   double fps = 30;                   // mp4
   std::string background = "0,0,0";  // RGB in [0, 1]
   BackendChoice backend;
+  bool overwrite = false;            // replace the views of an earlier render in `out`
 };
 
 // `gslam render`: renders a map into DIR/view_NNNN.{png,exr} and/or DIR/render.mp4:
-// - along camera poses (a run folder's trajectory, or --trajectory with --intrinsics): a smooth
-//   path near them by default (viewer/views.h novel_path), or the poses themselves;
+// - along camera poses: exactly at the poses of a --trajectory (with --intrinsics, or a run
+//   folder's camera), or for a run folder's own trajectory a smooth path near them
+//   (viewer/views.h novel_path); --path chooses either way;
 // - or on an orbit: about the centre at the cameras' height with their up where the map has
 //   poses, else at 2.5 map radii about --up.
-// Prints progress and a one-line summary; returns the process exit code. Throws splat::Error.
+// Refuses an `out` that holds an earlier render's views unless `overwrite` (which removes them).
+// Prints the path used, progress and a one-line summary; returns the process exit code. Throws
+// splat::Error.
 int run_render(const RenderOptions& options);
 
 }  // namespace app

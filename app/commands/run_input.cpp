@@ -1,19 +1,19 @@
 #include "commands/run_input.h"
 
 #include <cstdio>
+#include <fstream>
 
 #include "io/slam_config_io.h"
 #include "splat/error.h"
 
 namespace app {
 
-nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
-                              int test_every, const SlamConfig& config) {
-  const splat::Camera& k = dataset.intrinsics;
+nlohmann::json run_input_json(const std::filesystem::path& input, const std::string& format, const splat::Camera& k,
+                              double depth_scale, int max_frames, int test_every, const SlamConfig& config) {
   return {{"dataset", std::filesystem::absolute(input).string()},
-          {"format", dataset.format},
+          {"format", format},
           {"intrinsics", {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"width", k.width}, {"height", k.height}}},
-          {"depth_scale", dataset.depth_scale},
+          {"depth_scale", depth_scale},
           {"max_frames", max_frames},
           {"test_every", test_every},
           {"config", slam_config_to_json(config)}};
@@ -37,6 +37,19 @@ RecordedInput recorded_input(const nlohmann::json& in, const std::string& where)
     throw splat::Error(where + ": \"input\" is malformed: " + e.what());
   }
   return r;
+}
+
+std::optional<Intrinsics> recorded_camera(const std::filesystem::path& summary_path) {
+  std::ifstream in(summary_path);
+  if (!in) throw splat::Error(summary_path.string() + ": cannot open file (not a run folder?)");
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+  try {
+    const nlohmann::json& k = summary.at("input").at("intrinsics");
+    return Intrinsics{k.at("fx").get<double>(), k.at("fy").get<double>(), k.at("cx").get<double>(),
+                      k.at("cy").get<double>(), k.at("width").get<int>(),  k.at("height").get<int>()};
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace app

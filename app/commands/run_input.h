@@ -2,17 +2,25 @@
 // configuration): written by reconstruct, read back by eval and by reconstruct --resume.
 #pragma once
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "datasets/dataset.h"
 #include "slam/slam_config.h"
+#include "viewer/views.h"
 
 namespace app {
 
-nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
-                              int test_every, const SlamConfig& config);
+// The "input" section: where frames came from (`format`: tum, replica, folder, or watched for a
+// folder a camera driver wrote), their camera and depth units, and the settings of the run.
+nlohmann::json run_input_json(const std::filesystem::path& input, const std::string& format, const splat::Camera& k,
+                              double depth_scale, int max_frames, int test_every, const SlamConfig& config);
+inline nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
+                                     int test_every, const SlamConfig& config) {
+  return run_input_json(input, dataset.format, dataset.intrinsics, dataset.depth_scale, max_frames, test_every, config);
+}
 
 // --test-every N: frame i (counted from 0) is a held-out test view when (i + 1) % N == 0, so the
 // first frame, which defines the world, never is. N = 0: none.
@@ -28,5 +36,10 @@ struct RecordedInput {
 };
 // Throws splat::Error naming `where` (the file it came from) when a field is missing or malformed.
 RecordedInput recorded_input(const nlohmann::json& input, const std::string& where);
+
+// The camera a run recorded in its summary.json ("input"."intrinsics": fx, fy, cx, cy, width,
+// height), for render and view. Throws splat::Error naming the file when it cannot be opened;
+// nullopt when it records no camera (or is not JSON).
+std::optional<Intrinsics> recorded_camera(const std::filesystem::path& summary_path);
 
 }  // namespace app

@@ -5,12 +5,14 @@
 #include <fstream>
 
 #include "io/atomic_file.h"
+#include "io/gltf_io.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
 #include "io/run_checkpoint.h"
 #include "io/run_folder.h"
 #include "splat/error.h"
 #include "splat/rgbd_frame.h"
+#include "viewer/views.h"
 
 namespace app {
 namespace {
@@ -187,10 +189,22 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
   if (!map.empty()) {
     files.insert(files.end(), {"map.ply", "map.glb"});
     save_map(out_ / "map.ply", map);
-    save_map(out_ / "map.glb", map);
+    // The world's up (the floor's normal, else the cameras'), recorded and standing map.glb
+    // upright in glTF's axes (+Y up).
+    Eigen::Quaterniond gltf_from_world = Eigen::Quaterniond::Identity();
+    std::vector<Eigen::Isometry3d> poses;
+    for (const StampedPose& pose : trajectory_) poses.push_back(pose.T_world_cam);
+    try {
+      const WorldUp up = estimate_world_up(poses, map);
+      extra_["world_up"] = {{"x", up.up.x()}, {"y", up.up.y()}, {"z", up.up.z()}, {"source", up.source_name()}};
+      gltf_from_world = gltf_rotation_for_up(up.up);
+    } catch (const splat::Error& e) {  // no poses, or cameras that agree on no up: map.glb as it is
+      extra_["world_up_unavailable"] = e.what();
+    }
+    save_map(out_ / "map.glb", map, gltf_from_world);
     // The final map seen from every keyframe.
     std::filesystem::create_directories(out_ / "keyframes");
-    for (std::size_t i = 0; i < records_.size(); ++i) {
+    for (std::size_t i = 0; i < records_.size() && !stopping_; ++i) {
       if (!records_[i].keyframe) continue;
       const splat::Camera cam = splat::posed(intrinsics, records_[i].T_world_cam.inverse());
       const splat::ForwardResult f = rasterizer.forward(map, cam, {});
@@ -211,7 +225,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
       extra_["ate_unavailable"] = e.what();
     }
   }
-  write_json(out_ / "summary.json", summary(map, keyframes, true, files));
+  write_json(out_ / "summary.json", summary(map, keyframes, !resumable_, files));
   if (map.empty()) {
     throw splat::Error(input_ + ": nothing was reconstructed: no frame of " + std::to_string(records_.size()) +
                        " had usable depth (" + std::to_string(failures_) + " untracked)");

@@ -42,6 +42,12 @@ class RunOutputs {
   void set_mapping(const MappingTotals& totals, const std::vector<LoopEvent>& loops);
   // Extra summary fields (live mode: dropped frames, latency percentiles).
   nlohmann::json& extra() { return extra_; }
+  // The run stopped before its input ended and can continue (reconstruct --resume): finish()
+  // then writes "complete": false.
+  void set_resumable(bool resumable) { resumable_ = resumable; }
+  // Ctrl-C: finish() leaves out the keyframe renders (a second or more a dozen keyframes), so
+  // the program stops promptly; everything else is written.
+  void set_stopping(bool stopping) { stopping_ = stopping; }
   // Writes trajectory.txt and summary.json (complete: false), and map.ply when `with_map`.
   void checkpoint(const splat::Gaussians& map, std::size_t keyframes, bool with_map);
   // Writes everything: trajectory, map.ply, map.glb, keyframe renders and the final summary
@@ -71,6 +77,7 @@ class RunOutputs {
   nlohmann::json extra_ = nlohmann::json::object();
   TrajectoryErrors errors_;
   bool has_errors_ = false;
+  bool resumable_ = false, stopping_ = false;
 };
 
 

@@ -1,14 +1,15 @@
 #include "datasets/dataset.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <regex>
 #include <sstream>
 
+#include "io/file_error.h"
 #include "io/image_io.h"
 #include "io/trajectory.h"
-#include "io/file_error.h"
 #include "splat/error.h"
 #include "splat/se3.h"
 
@@ -80,7 +81,8 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   } else if (name.find("freiburg3") != std::string::npos) {
     d.intrinsics.fx = 535.4, d.intrinsics.fy = 539.2, d.intrinsics.cx = 320.1, d.intrinsics.cy = 247.6;
   } else {
-    fail(root, "unknown TUM camera (no freiburg1/2/3 in the path): give --intrinsics fx,fy,cx,cy");
+    fail(root, "unknown TUM camera (no freiburg1/2/3 in the path): give --intrinsics fx,fy,cx,cy "
+               "or write intrinsics.txt holding 'fx fy cx cy'");
   }
   std::vector<ListEntry> rgb = read_list(root / "rgb.txt"), depth = read_list(root / "depth.txt");
   // Only entries whose files exist take part (the lists may name more frames than are present).
@@ -89,12 +91,20 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
     list.erase(std::remove_if(list.begin(), list.end(), [&](const ListEntry& e) { return !std::filesystem::exists(root / e.file); }), list.end());
     return before - list.size();
   };
-  d.skipped_missing = present(rgb) + present(depth);
+  d.listed = rgb.size();
+  d.missing_colour = present(rgb);
+  d.skipped_missing = d.missing_colour + present(depth);
   std::vector<double> rgb_t, depth_t;
   for (const auto& e : rgb) rgb_t.push_back(e.timestamp);
   for (const auto& e : depth) depth_t.push_back(e.timestamp);
   const auto pairs = associate(rgb_t, depth_t);
   d.unmatched = rgb.size() - pairs.size();
+  // Most colour images without depth: the lists' clocks or names disagree, not a partial copy.
+  if (d.unmatched > 0 && 2 * d.unmatched > rgb.size()) {
+    d.warnings.push_back((root / "depth.txt").string() + ": " + std::to_string(d.unmatched) +
+                         " of " + std::to_string(rgb.size()) +
+                         " colour images have no depth image within 0.02 s");
+  }
   std::vector<StampedPose> truth;
   if (std::filesystem::exists(root / "groundtruth.txt")) truth = read_tum_trajectory(root / "groundtruth.txt");
   std::vector<double> truth_t;
@@ -102,7 +112,13 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   std::vector<double> frame_t;
   for (const auto& [i, j] : pairs) frame_t.push_back(rgb[i].timestamp);
   std::vector<std::optional<Eigen::Isometry3d>> frame_truth(pairs.size());
-  for (const auto& [f, g] : associate(frame_t, truth_t)) frame_truth[f] = truth[g].T_world_cam;
+  const auto truth_pairs = associate(frame_t, truth_t);
+  for (const auto& [f, g] : truth_pairs) frame_truth[f] = truth[g].T_world_cam;
+  if (!truth.empty() && !pairs.empty() && truth_pairs.empty()) {
+    d.warnings.push_back(
+        (root / "groundtruth.txt").string() +
+        ": no pose within 0.02 s of any frame (another clock?); the frames have no ground truth");
+  }
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     d.entries.push_back({rgb[pairs[k].first].timestamp, root / rgb[pairs[k].first].file, root / depth[pairs[k].second].file, frame_truth[k]});
   }
@@ -147,15 +163,49 @@ Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& op
     std::snprintf(depth, sizeof(depth), "depth%06zu.png", i);
     const auto rgb_path = root / "results" / rgb, depth_path = root / "results" / depth;
     if (!std::filesystem::exists(rgb_path)) break;
+    ++d.listed;
     if (!std::filesystem::exists(depth_path)) {
       ++d.skipped_missing;
+      ++d.unmatched;
       continue;
     }
     DatasetEntry e{static_cast<double>(i) / 30.0, rgb_path, depth_path, std::nullopt};
     if (i < poses.size()) e.T_world_cam_truth = poses[i];
     d.entries.push_back(e);
   }
+  if (poses.size() < d.listed) {
+    d.warnings.push_back((root / "traj.txt").string() + ": " + std::to_string(poses.size()) +
+                         " poses for " + std::to_string(d.listed) +
+                         " frames; the frames beyond have no ground truth");
+  }
   return d;
+}
+
+// What a folder that matches no layout has and lacks, for open_dataset's error.
+std::string what_is_missing(const std::filesystem::path& root) {
+  namespace fs = std::filesystem;
+  const auto has = [&](const char* name) { return fs::exists(root / name); };
+  if (has("rgb.txt")) return "has rgb.txt but no depth.txt";
+  if (has("depth.txt")) return "has depth.txt but no rgb.txt";
+  if (has("traj.txt")) return "has traj.txt but no results/ folder";
+  if (fs::is_directory(root / "results")) return "has results/ but no traj.txt";
+  if (fs::is_directory(root / "rgb") || fs::is_directory(root / "depth")) {
+    return "has rgb/ or depth/ but no rgb.txt and depth.txt listing their images";
+  }
+  std::size_t entries = 0, images = 0;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(root, ec)) {
+    ++entries;
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    images += ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+  }
+  if (images > 0) {
+    return "has " + std::to_string(images) + " image files but no rgb.txt and depth.txt listing them";
+  }
+  if (entries == 0) return "is empty";
+  return "has none of rgb.txt, depth.txt, traj.txt, results/";
 }
 
 }  // namespace
@@ -190,6 +240,28 @@ std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<dou
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+namespace {
+
+// Why the listed frames not used are not: "2209 have no colour image here, 7 no depth ...".
+std::string unused_frames(const Dataset& d) {
+  std::string out;
+  const auto add = [&](std::size_t n, const std::string& why) {
+    if (n > 0) out += (out.empty() ? "" : ", ") + std::to_string(n) + why;
+  };
+  add(d.missing_colour, " have no colour image here");
+  add(d.unmatched, d.format == "replica" ? " no depth image" : " no depth within 0.02 s");
+  add(d.beyond_max_frames, " beyond --max-frames");
+  return out;
+}
+
+}  // namespace
+
+std::string Dataset::frames_used() const {
+  const std::string used = std::to_string(entries.size()) + " frames";
+  if (entries.size() == listed) return used;
+  return used + " used (of " + std::to_string(listed) + " listed; " + unused_frames(*this) + ")";
 }
 
 bool Dataset::has_ground_truth() const {
@@ -234,10 +306,21 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {
     d = open_replica(root, options);
   } else {
-    fail(root, "not a dataset folder: expected TUM (rgb.txt, depth.txt) or Replica (results/, traj.txt)");
+    fail(root, "not a dataset folder (" + what_is_missing(root) +
+                   "); accepted: TUM RGB-D (rgb.txt + depth.txt, lines 'timestamp path', "
+                   "optional groundtruth.txt; camera from freiburg1/2/3 in the path or "
+                   "--intrinsics), the plain folder (the same lists + intrinsics.txt 'fx fy cx "
+                   "cy'), Replica (results/frameNNNNNN.jpg + results/depthNNNNNN.png + "
+                   "traj.txt); see docs/guide.md");
   }
-  if (d.entries.empty()) fail(root, "no frame has both colour and depth");
+  if (d.entries.empty()) {
+    fail(root, "no frame has both colour and depth (" +
+                   (d.listed == 0 ? std::string("none listed")
+                                  : std::to_string(d.listed) + " listed: " + unused_frames(d)) +
+                   ")");
+  }
   if (options.max_frames > 0 && d.entries.size() > static_cast<std::size_t>(options.max_frames)) {
+    d.beyond_max_frames = d.entries.size() - static_cast<std::size_t>(options.max_frames);
     d.entries.resize(static_cast<std::size_t>(options.max_frames));
   }
   set_size_from(d.intrinsics, d.entries.front().rgb);

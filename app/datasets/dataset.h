@@ -24,13 +24,26 @@ struct DatasetEntry {
 
 // An RGB-D sequence on disk: entries in time order, loaded one frame at a time.
 struct Dataset {
-  std::string format;       // "tum", "replica" or "folder"
+  std::string format;  // "tum" (the plain folder too), "replica"; "watched" for live --watch
   std::filesystem::path root;
   splat::Camera intrinsics; // pose unused
   double depth_scale = 5000;
   std::vector<DatasetEntry> entries;
-  std::size_t skipped_missing = 0;  // listed entries whose image files do not exist
-  std::size_t unmatched = 0;        // colour frames without a depth frame within 0.02 s
+  // Where the listed frames went: listed = entries.size() + missing_colour + unmatched +
+  // beyond_max_frames. A folder holding part of a sequence (lists for all of it, images for some)
+  // is normal and not a warning.
+  std::size_t listed = 0;          // colour frames listed (rgb.txt lines; Replica frame*.jpg found)
+  std::size_t missing_colour = 0;  // listed colour frames whose image file does not exist
+  std::size_t unmatched = 0;       // colour images present without depth (TUM: none within 0.02 s)
+  std::size_t beyond_max_frames = 0;  // frames left out by --max-frames
+  std::size_t skipped_missing = 0;    // listed files (colour and depth) that do not exist
+  // Real problems found while opening (ground truth matching no frame, most colour images
+  // without depth, fewer Replica poses than frames), one line each, for the caller to print.
+  std::vector<std::string> warnings;
+
+  // "193 frames used (of 2406 listed; 2206 have no colour image here, 7 no depth within 0.02 s)",
+  // or "193 frames" when every listed frame is used.
+  std::string frames_used() const;
 
   // Reads entry i (colour /255, depth / depth_scale). Throws splat::Error naming the file for
   // unreadable images or a size that does not match the intrinsics.
@@ -39,9 +52,11 @@ struct Dataset {
 };
 
 // Opens a dataset folder, detecting its format: TUM RGB-D (rgb.txt, depth.txt, optional
-// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), Replica as used by
-// NICE-SLAM/SplaTAM (results/frame*.jpg|png, results/depth*.png / 6553.5, traj.txt), or the plain
-// folder format (README). An unknown camera without --intrinsics is an error, never a guess.
+// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), the plain folder (the
+// same lists plus intrinsics.txt "fx fy cx cy"), or Replica as used by NICE-SLAM/SplaTAM
+// (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5, traj.txt). An unknown camera without
+// --intrinsics is an error, never a guess. A folder that matches no layout is an error naming
+// every layout and what the folder lacks.
 // Intrinsics "fx,fy,cx,cy" with the image size of the colour image `rgb`. Throws splat::Error
 // naming the text or the file.
 splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb);

@@ -33,7 +33,15 @@ class Mailbox {
     std::optional<ArrivedFrame> out = std::move(slot_);
     slot_.reset();
     if (out) ++delivered_;
+    lock.unlock();
+    taken_.notify_all();
     return out;
+  }
+  // Waits until the slot is empty (its frame taken) or `stop`; false if stopped.
+  bool wait_until_taken(const std::atomic<bool>& stop) {
+    std::unique_lock lock(mutex_);
+    while (slot_ && !stop) taken_.wait_for(lock, std::chrono::milliseconds(20));
+    return !stop;
   }
   void close() {
     {
@@ -61,7 +69,7 @@ class Mailbox {
 
  private:
   mutable std::mutex mutex_;
-  std::condition_variable ready_;
+  std::condition_variable ready_, taken_;
   std::optional<ArrivedFrame> slot_;
   bool closed_ = false;
   std::size_t delivered_ = 0, dropped_ = 0;
@@ -76,6 +84,7 @@ class ThreadedSource : public FrameSource {
     return mailbox_.take(timeout);
   }
   bool finished() const override { return mailbox_.finished(); }
+  void stop() override { stop_and_join(); }
   std::size_t delivered() const override { return mailbox_.delivered(); }
   std::size_t dropped() const override { return mailbox_.dropped(); }
 
@@ -121,13 +130,14 @@ class ThreadedSource : public FrameSource {
 class ReplaySource final : public ThreadedSource {
  public:
   ReplaySource(Dataset dataset, double speed) : dataset_(std::move(dataset)), speed_(speed) {
-    if (!(speed_ > 0))
+    if (!(speed_ > 0) && speed_ != kEveryFrame)
       throw splat::Error("replay speed " + std::to_string(speed) + ": expected > 0");
     start();
   }
   ~ReplaySource() override { stop_and_join(); }
   const splat::Camera& intrinsics() const override { return dataset_.intrinsics; }
   std::string describe() const override {
+    if (speed_ == kEveryFrame) return dataset_.root.string() + " replayed frame by frame (none dropped)";
     return dataset_.root.string() + " replayed at " + std::to_string(speed_).substr(0, 4) +
            "x its recorded rate";
   }
@@ -136,6 +146,15 @@ class ReplaySource final : public ThreadedSource {
   void produce() override {
     const auto& entries = dataset_.entries;
     if (entries.empty()) return;
+    if (speed_ == kEveryFrame) {
+      for (std::size_t i = 0; i < entries.size(); ++i) {
+        ArrivedFrame frame{dataset_.load(i), {}, entries[i].T_world_cam_truth};
+        if (!mailbox_.wait_until_taken(stop_)) return;
+        frame.arrived = Clock::now();
+        mailbox_.put(std::move(frame));
+      }
+      return;
+    }
     const Clock::time_point t0 = Clock::now();
     const double first = entries.front().timestamp;
     auto due = [&](std::size_t i) {

@@ -26,6 +26,9 @@ class FrameSource {
   virtual std::optional<ArrivedFrame> next(std::chrono::milliseconds timeout) = 0;
   // True once no frame will come any more (end of the recording, END file, idle timeout).
   virtual bool finished() const = 0;
+  // Stops taking frames from the camera or recording (at the end of a run): delivered() and
+  // dropped() keep their values from then on.
+  virtual void stop() = 0;
   virtual std::size_t delivered() const = 0;  // frames handed out by next()
   virtual std::size_t dropped() const = 0;    // frames replaced before anyone took them
   virtual const splat::Camera& intrinsics() const = 0;
@@ -33,7 +36,10 @@ class FrameSource {
 };
 
 // Replays dataset frames at their recorded timestamps (speed 2 = twice as fast) from a thread
-// of its own; frames whose time has passed before they could be loaded are dropped.
+// of its own; frames whose time has passed before they could be loaded are dropped. Speed
+// kEveryFrame replays every frame, each once the previous one has been taken, with no clock:
+// none is dropped, however slow the consumer (tests, slow machines).
+inline constexpr double kEveryFrame = 0;
 std::unique_ptr<FrameSource> make_replay_source(Dataset dataset, double speed);
 
 struct WatchOptions {

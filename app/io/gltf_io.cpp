@@ -20,6 +20,10 @@ namespace {
 constexpr const char* kExtension = "KHR_gaussian_splatting";
 constexpr const char* kPrefix = "KHR_gaussian_splatting:";
 constexpr double kShC0 = 0.28209479177387814;
+// write_gltf's mark on the node whose rotation turns gslam's world frame into glTF's axes.
+constexpr const char* kGslamExtras = "gslam";
+constexpr const char* kNodeRotation = "node_rotation";
+constexpr const char* kWorldToGltf = "world_to_gltf";
 
 double decode_component(const unsigned char* p, int component_type, bool normalized) {
   auto as = [&](auto v) {
@@ -167,6 +171,12 @@ std::string string_or(const tinygltf::Value& obj, const char* key, const std::st
   return obj.Get(key).Get<std::string>();
 }
 
+// Whether write_gltf marked this node's transform as its axis rotation (gslam's world to glTF).
+bool gslam_axis_node(const tinygltf::Node& node) {
+  return node.extras.IsObject() && node.extras.Has(kGslamExtras) &&
+         string_or(node.extras.Get(kGslamExtras), kNodeRotation, "") == kWorldToGltf;
+}
+
 GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf::Primitive& prim,
                                     const Eigen::Matrix4d& world, const std::string& name,
                                     const std::filesystem::path& path,
@@ -272,7 +282,8 @@ void visit_nodes(const tinygltf::Model& model, int index, const Eigen::Matrix4d&
   }
   visited[static_cast<std::size_t>(index)] = 1;
   if (depth > 64) fail(path, "node hierarchy deeper than 64");
-  const Eigen::Matrix4d world = parent * node_local_matrix(node);
+  // gslam's axis rotation is left out, so its maps read back in the frame they were made in.
+  const Eigen::Matrix4d world = gslam_axis_node(node) ? parent : Eigen::Matrix4d(parent * node_local_matrix(node));
   if (node.mesh >= 0) {
     const tinygltf::Mesh& mesh = element(model.meshes, node.mesh, "node " + std::to_string(index) + ": mesh", path);
     for (const auto& prim : mesh.primitives) {
@@ -413,8 +424,26 @@ int add_float_accessor(tinygltf::Model& model, const std::vector<float>& data, i
 
 }  // namespace
 
-void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
+Eigen::Quaterniond gltf_rotation_for_up(const Eigen::Vector3d& world_up) {
+  if (!world_up.allFinite() || !(world_up.norm() > 0)) {
+    throw splat::Error("gltf_rotation_for_up: the up vector is zero or not finite");
+  }
+  // glTF's axes in the world frame: Y = up, -Z = the world's +z levelled (or, where +z is
+  // near vertical, its -y: the top of the first image), X = Y x Z.
+  const Eigen::Vector3d y = world_up.normalized();
+  Eigen::Vector3d forward = Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ().dot(y) * y;
+  if (forward.norm() < 0.1) forward = -Eigen::Vector3d::UnitY() + Eigen::Vector3d::UnitY().dot(y) * y;
+  const Eigen::Vector3d z = -forward.normalized();
+  Eigen::Matrix3d world_from_gltf;
+  world_from_gltf << y.cross(z), y, z;
+  return Eigen::Quaterniond(world_from_gltf.transpose()).normalized();
+}
+
+void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g, const Eigen::Quaterniond& gltf_from_world) {
   splat::validate(splat::GaussiansView(g), "write_gltf " + path.string());
+  if (!gltf_from_world.coeffs().allFinite() || std::abs(gltf_from_world.norm() - 1) > 1e-6) {
+    throw splat::Error("write_gltf " + path.string() + ": the node rotation is not a unit quaternion");
+  }
   const std::size_t n = g.size();
   const std::size_t k = static_cast<std::size_t>(splat::sh_coeff_count(g.sh_degree));
   tinygltf::Model model;
@@ -471,6 +500,14 @@ void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g) {
   tinygltf::Node node;
   node.mesh = 0;
   node.name = "gaussians";
+  if (!gltf_from_world.isApprox(Eigen::Quaterniond::Identity(), 1e-12)) {
+    node.rotation = {gltf_from_world.x(), gltf_from_world.y(), gltf_from_world.z(), gltf_from_world.w()};
+    tinygltf::Value::Object mark;
+    mark[kNodeRotation] = tinygltf::Value(std::string(kWorldToGltf));
+    tinygltf::Value::Object extras;
+    extras[kGslamExtras] = tinygltf::Value(mark);
+    node.extras = tinygltf::Value(extras);
+  }
   model.nodes.push_back(node);
   tinygltf::Scene scene;
   scene.nodes = {0};

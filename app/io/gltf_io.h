@@ -3,6 +3,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "splat/gaussians.h"
 
 namespace app {
@@ -30,7 +32,9 @@ struct GltfSplatScene {
   std::vector<std::string> notices;  // fallbacks taken (unknown kernel, colour space, ...)
 };
 
-// Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file. SCALE is linear and
+// Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file, in the scene's frame (node
+// transforms applied), except that a node marked as write_gltf marks its axis rotation keeps
+// its own transform out: gslam's files read back in the frame gslam wrote them from. SCALE is linear and
 // never negative in the extension's text since April 2026; drafts before it stored log-scales,
 // and their writers COLOR_0 as display (sRGB-encoded) values. The rule: a file with any negative
 // SCALE value was written to an older draft, and all its SCALEs are read as log-scales and its
@@ -44,10 +48,24 @@ GltfSplatScene read_gltf_splats(const std::filesystem::path& path);
 // Opacities are clamped to [1e-6, 1 - 1e-6] before the logit so 0 and 1 stay finite.
 splat::Gaussians to_gaussians(const GltfSplatScene& scene);
 
+// The rotation from a map's world frame to glTF's axes (+Y up, right-handed, metres) that takes
+// `world_up` (world frame, any length) to +Y and the world's +z (the first camera's view
+// direction in a gslam map), levelled, to -Z: a glTF viewer's default camera, looking down -Z,
+// then looks where the first camera did. For world_up = -y (a level OpenCV camera) it is the
+// usual OpenCV-to-glTF turn, 180 degrees about x. Throws splat::Error for a zero or non-finite up.
+Eigen::Quaterniond gltf_rotation_for_up(const Eigen::Vector3d& world_up);
+
 // Writes the map as a .glb (or .gltf with embedded buffers, by extension) with one POINTS
 // primitive: POSITION, KHR_gaussian_splatting ROTATION (unit, xyzw), SCALE (linear, metres),
 // OPACITY, SH_DEGREE_l_COEF_n for every degree of the map, and COLOR_0 (diffuse colour in linear
-// light, and opacity) for viewers without the extension. Coordinates are written as they are (no axis change).
-void write_gltf(const std::filesystem::path& path, const splat::Gaussians& gaussians);
+// light, and opacity) for viewers without the extension. The attributes hold the map as it is
+// (its world frame); `gltf_from_world`, unless the identity, becomes the rotation of the node
+// that carries them (the extension derives each splat's covariance from its attributes and the
+// node's transform, so the splats are in the node's local frame; SH coefficients, in that frame
+// too, are left as they are), marked in the node's extras
+// (`"gslam": {"node_rotation": "world_to_gltf"}`) so that read_gltf_splats gives the map back in
+// its world frame.
+void write_gltf(const std::filesystem::path& path, const splat::Gaussians& gaussians,
+                const Eigen::Quaterniond& gltf_from_world = Eigen::Quaterniond::Identity());
 
 }  // namespace app

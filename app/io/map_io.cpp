@@ -28,10 +28,11 @@ LoadedMap load_map(const std::filesystem::path& path) {
   return out;
 }
 
-void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussians) {
+void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussians,
+              const Eigen::Quaterniond& gltf_from_world) {
   const std::string ext = path.extension().string();
   if (ext == ".ply") return write_ply(path, gaussians);
-  if (ext == ".glb" || ext == ".gltf") return write_gltf(path, gaussians);
+  if (ext == ".glb" || ext == ".gltf") return write_gltf(path, gaussians, gltf_from_world);
   throw splat::Error(path.string() + ": unknown map format '" + ext + "', expected .ply, .glb or .gltf");
 }
 

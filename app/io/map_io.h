@@ -3,6 +3,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "splat/gaussians.h"
 
 namespace app {
@@ -16,7 +18,9 @@ struct LoadedMap {
 // An empty map is an error naming the file.
 LoadedMap load_map(const std::filesystem::path& path);
 
-// Saves a map by extension (.ply, .glb or .gltf), atomically.
-void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussians);
+// Saves a map by extension (.ply, .glb or .gltf), atomically. A glTF file gets `gltf_from_world`
+// as its node rotation (write_gltf); a PLY file is written in the world frame regardless.
+void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussians,
+              const Eigen::Quaterniond& gltf_from_world = Eigen::Quaterniond::Identity());
 
 }  // namespace app

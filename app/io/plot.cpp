@@ -23,7 +23,12 @@ constexpr int kTextScale = 2;
 int text_width(const std::string& text) {
   return stb_easy_font_width(const_cast<char*>(text.c_str())) * kTextScale;
 }
-constexpr int kTextHeight = 7 * kTextScale;
+constexpr int kTextHeight = 7 * kTextScale;  // capitals and digits
+constexpr int kTextDepth = 10 * kTextScale;  // with descenders (g, p, y)
+constexpr int kTextInset = 2;                // text keeps this far from the image's edges
+constexpr int kLineWidth = 2;                // single-colour series, pixels
+constexpr int kColouredWidth = 5;  // series coloured by value: wide enough to read the colour
+constexpr int kColourBar = 100;    // colour bar length in the legend, pixels
 
 void draw_text(splat::Image8& img, int x, int y, const std::string& text, const Color& c) {
   struct Vertex {
@@ -51,6 +56,18 @@ std::string format_tick(double v, double step) {
 
 }  // namespace
 
+namespace {
+
+// Integer multiples of `step` within [lo, hi] (so no rounding accumulates).
+std::vector<double> ticks_with_step(double lo, double hi, double step) {
+  std::vector<double> ticks;
+  const double first = std::ceil(lo / step - 1e-9), last = std::floor(hi / step + 1e-9);
+  for (double k = first; k <= last; ++k) ticks.push_back(k * step);
+  return ticks;
+}
+
+}  // namespace
+
 std::vector<double> nice_ticks(double lo, double hi, int count) {
   if (!(hi > lo) || count < 1) return {lo};
   const double raw = (hi - lo) / count;
@@ -60,10 +77,7 @@ std::vector<double> nice_ticks(double lo, double hi, int count) {
     step = m * power;
     if (step >= raw) break;
   }
-  std::vector<double> ticks;  // integer multiples of the step, so no rounding accumulates
-  const double first = std::ceil(lo / step - 1e-9), last = std::floor(hi / step + 1e-9);
-  for (double k = first; k <= last; ++k) ticks.push_back(k * step);
-  return ticks;
+  return ticks_with_step(lo, hi, step);
 }
 
 std::array<uint8_t, 3> scale_color(double t) {
@@ -104,91 +118,165 @@ splat::Image8 LinePlot::render() const {
     x0 = std::min(x0, m.x), x1 = std::max(x1, m.x);
     y0 = std::min(y0, m.y), y1 = std::max(y1, m.y);
   }
+  if (!(x1 >= x0)) x0 = 0, x1 = 0;  // nothing to plot
+  if (!(y1 >= y0)) y0 = 0, y1 = 0;
+  if (equal_) {
+    // A flat path (a line along one axis) still gets a square of the other one's size.
+    const double span = std::max(x1 - x0, y1 - y0) > 0 ? std::max(x1 - x0, y1 - y0) : 2.0;
+    if (!(x1 > x0)) x0 -= 0.5 * span, x1 += 0.5 * span;
+    if (!(y1 > y0)) y0 -= 0.5 * span, y1 += 0.5 * span;
+  }
   if (!(x1 > x0)) x0 -= 1, x1 += 1;
   if (!(y1 > y0)) y0 -= 1, y1 += 1;
-  // A margin of 4% of the range on every side: no curve runs along the frame.
-  const double mx = 0.04 * (x1 - x0), my = 0.04 * (y1 - y0);
+  // A margin of 4% of the range on every side (of the larger range with equal axes, so the
+  // margin is the same length on both): no curve runs along the frame.
+  const double mx = 0.04 * (equal_ ? std::max(x1 - x0, y1 - y0) : x1 - x0);
+  const double my = 0.04 * (equal_ ? std::max(x1 - x0, y1 - y0) : y1 - y0);
   x0 -= mx, x1 += mx, y0 -= my, y1 += my;
-  // Room for tick numbers and titles on the left and bottom.
-  const int left = 80, right = 20, top = title_.empty() ? 24 : 44, bottom = 56;
-  double sx = (width_ - left - right) / (x1 - x0), sy = (height_ - top - bottom) / (y1 - y0);
-  if (equal_) sx = sy = std::min(sx, sy);
+
+  // The legend goes in a band above the plot area, so it never hides data: named series left to
+  // right, wrapping to a new row when the width is used up.
+  const Color grey = {160, 160, 160}, light = {232, 232, 232}, black = {0, 0, 0};
+  const int left = 80, right = 20, bottom = 56, row = kTextHeight + 8;
+  struct LegendItem {
+    const Series* series;
+    int x, y, width;
+    std::string low, high;  // a coloured series' range
+  };
+  std::vector<LegendItem> legend;
+  int legend_x = left, legend_y = title_.empty() ? 6 : 24;
+  bool any_legend = false;
+  for (const auto& s : series_) {
+    if (s.name.empty()) continue;
+    LegendItem item{&s, 0, 0, 26 + text_width(s.name), {}, {}};
+    if (!s.value.empty()) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (double v : s.value) lo = std::min(lo, v), hi = std::max(hi, v);
+      char range[64];
+      std::snprintf(range, sizeof range, "%.3g", lo);
+      item.low = range;
+      std::snprintf(range, sizeof range, "%.3g", hi);
+      item.high = range;
+      item.width = text_width(item.low) + 6 + kColourBar + 6 + text_width(item.high) + 10 +
+                   text_width(s.name);
+    }
+    if (legend_x > left && legend_x + item.width > width_ - right) legend_x = left, legend_y += row;
+    item.x = legend_x, item.y = legend_y;
+    legend_x += item.width + 24;
+    legend.push_back(item);
+    any_legend = true;
+  }
+  // Room for tick numbers and titles on the left and bottom; the title, the legend and the y
+  // axis title on top.
+  const int top = any_legend ? legend_y + row + 20 : (title_.empty() ? 24 : 44);
+  const int plot_w = std::max(1, width_ - left - right),
+            plot_h = std::max(1, height_ - top - bottom);
+  double sx = plot_w / (x1 - x0), sy = plot_h / (y1 - y0);
+  if (equal_) {
+    // The same metres per pixel on both axes; the data centred, the shorter range widened.
+    sx = sy = std::min(sx, sy);
+    const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+    x0 = cx - 0.5 * plot_w / sx, x1 = cx + 0.5 * plot_w / sx;
+    y0 = cy - 0.5 * plot_h / sy, y1 = cy + 0.5 * plot_h / sy;
+  }
   auto px = [&](double x) { return left + (x - x0) * sx; };
   auto py = [&](double y) { return height_ - bottom - (y - y0) * sy; };
-  // The axes span what is visible (with equal axes, more than the data on one side).
-  const double x_end = x0 + (width_ - left - right) / sx, y_end = y0 + (height_ - top - bottom) / sy;
-  const Color grey = {160, 160, 160}, light = {232, 232, 232}, black = {0, 0, 0};
-  auto dot = [&](int x, int y, const Color& c) { fill(img, x, y, x + 2, y + 2, c); };
-  auto line = [&](double ax, double ay, double bx, double by, const Color& c) {
+  // Text is placed whole inside the image: a label that would cross an edge is moved in.
+  auto text = [&](int x, int y, const std::string& s, const Color& c) {
+    x = std::clamp(x, kTextInset, std::max(kTextInset, width_ - kTextInset - text_width(s)));
+    y = std::clamp(y, kTextInset, std::max(kTextInset, height_ - kTextInset - kTextDepth));
+    draw_text(img, x, y, s, c);
+  };
+  auto line = [&](double ax, double ay, double bx, double by, const Color& c, int thickness) {
     const int steps = static_cast<int>(std::max(std::abs(bx - ax), std::abs(by - ay))) + 1;
+    const int lo = -(thickness - 1) / 2, hi = lo + thickness;
     for (int i = 0; i <= steps; ++i) {
       const double t = static_cast<double>(i) / steps;
-      dot(static_cast<int>(ax + t * (bx - ax)), static_cast<int>(ay + t * (by - ay)), c);
+      const int x = static_cast<int>(ax + t * (bx - ax)), y = static_cast<int>(ay + t * (by - ay));
+      fill(img, x + lo, y + lo, x + hi, y + hi, c);
     }
   };
-  const std::vector<double> xt = nice_ticks(x0, x_end, 6), yt = nice_ticks(y0, y_end, 5);
+  std::vector<double> xt = nice_ticks(x0, x1, 6), yt = nice_ticks(y0, y1, 5);
+  if (equal_ && xt.size() > 1 && yt.size() > 1) {
+    // One grid spacing on both axes (the finer: both axes have the same metres per pixel), so
+    // the grid's cells are square.
+    const double step = std::min(xt[1] - xt[0], yt[1] - yt[0]);
+    xt = ticks_with_step(x0, x1, step), yt = ticks_with_step(y0, y1, step);
+  }
   const double x_step = xt.size() > 1 ? xt[1] - xt[0] : 1, y_step = yt.size() > 1 ? yt[1] - yt[0] : 1;
   for (double t : xt) {
-    line(px(t), top, px(t), height_ - bottom, light);
+    line(px(t), top, px(t), height_ - bottom, light, 2);
     const std::string s = format_tick(t, x_step);
-    draw_text(img, static_cast<int>(px(t)) - text_width(s) / 2, height_ - bottom + 8, s, black);
+    text(static_cast<int>(px(t)) - text_width(s) / 2, height_ - bottom + 8, s, black);
   }
   for (double t : yt) {
-    line(left, py(t), width_ - right, py(t), light);
+    line(left, py(t), width_ - right, py(t), light, 2);
     const std::string s = format_tick(t, y_step);
-    draw_text(img, left - 8 - text_width(s), static_cast<int>(py(t)) - kTextHeight / 2, s, black);
+    text(left - 8 - text_width(s), static_cast<int>(py(t)) - kTextHeight / 2, s, black);
   }
-  line(left, height_ - bottom, width_ - right, height_ - bottom, grey);
-  line(left, top, left, height_ - bottom, grey);
-  for (const auto& s : series_) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (double v : s.value) lo = std::min(lo, v), hi = std::max(hi, v);
-    const double span = hi > lo ? hi - lo : 1;
-    for (std::size_t i = 1; i < s.x.size(); ++i) {
-      const Color c = s.value.empty() ? s.color : scale_color((0.5 * (s.value[i - 1] + s.value[i]) - lo) / span);
-      line(px(s.x[i - 1]), py(s.y[i - 1]), px(s.x[i]), py(s.y[i]), c);
+  line(left, height_ - bottom, width_ - right, height_ - bottom, grey, 2);
+  line(left, top, left, height_ - bottom, grey, 2);
+  // Coloured series first, single-colour ones over them and thinner: a reference path (ground
+  // truth) stays visible where the path compared with it runs along it.
+  for (const bool coloured : {true, false}) {
+    for (const auto& s : series_) {
+      if (s.value.empty() == coloured) continue;
+      double lo = INFINITY, hi = -INFINITY;
+      for (double v : s.value) lo = std::min(lo, v), hi = std::max(hi, v);
+      const double span = hi > lo ? hi - lo : 1;
+      for (std::size_t i = 1; i < s.x.size(); ++i) {
+        const Color c =
+            coloured ? scale_color((0.5 * (s.value[i - 1] + s.value[i]) - lo) / span) : s.color;
+        line(px(s.x[i - 1]), py(s.y[i - 1]), px(s.x[i]), py(s.y[i]), c,
+             coloured ? kColouredWidth : kLineWidth);
+      }
     }
   }
   for (const auto& m : markers_) {
     const int x = static_cast<int>(px(m.x)), y = static_cast<int>(py(m.y));
     fill(img, x - 6, y - 6, x + 7, y + 7, black);
     fill(img, x - 4, y - 4, x + 5, y + 5, m.color);
-    draw_text(img, x + 10, y - kTextHeight / 2, m.label, black);
+    // Right, left, above or below the marker, wherever the label covers the fewest drawn pixels
+    // (the path leaves a marker on one side), moved inside the image.
+    const int w = text_width(m.label);
+    const std::array<std::array<int, 2>, 4> candidates = {{{x + 10, y - kTextHeight / 2},
+                                                           {x - 10 - w, y - kTextHeight / 2},
+                                                           {x - w / 2, y - 10 - kTextHeight},
+                                                           {x - w / 2, y + 10}}};
+    std::array<int, 2> best = candidates[0];
+    long fewest = -1;
+    for (auto [cx, cy] : candidates) {
+      cx = std::clamp(cx, kTextInset, std::max(kTextInset, width_ - kTextInset - w));
+      cy = std::clamp(cy, kTextInset, std::max(kTextInset, height_ - kTextInset - kTextDepth));
+      long covered = 0;
+      for (int v = cy; v < std::min(height_, cy + kTextHeight); ++v)
+        for (int u = cx; u < std::min(width_, cx + w); ++u)
+          covered += img.at(u, v, 0) != 255 || img.at(u, v, 1) != 255 || img.at(u, v, 2) != 255;
+      if (fewest < 0 || covered < fewest) fewest = covered, best = {cx, cy};
+    }
+    text(best[0], best[1], m.label, black);
   }
-  if (!x_label_.empty()) {
-    draw_text(img, left + (width_ - left - right - text_width(x_label_)) / 2, height_ - bottom + 32, x_label_, black);
-  }
-  if (!y_label_.empty()) draw_text(img, 8, std::max(0, top - 16), y_label_, black);
-  if (!title_.empty()) draw_text(img, left, 2, title_, black);
-  // Legend, top right: a colour bar and the name of each named series; for a coloured one the
-  // scale, its lowest and its highest value.
-  int legend_y = top + 8;
-  for (const auto& s : series_) {
-    if (s.name.empty()) continue;
-    if (!s.value.empty()) {
-      double lo = INFINITY, hi = -INFINITY;
-      for (double v : s.value) lo = std::min(lo, v), hi = std::max(hi, v);
-      char range[64];
-      std::snprintf(range, sizeof range, "%.3g", lo);
-      const std::string low = range;
-      std::snprintf(range, sizeof range, "%.3g", hi);
-      const std::string high = range;
-      const int bar = 100, x = width_ - right - text_width(high) - bar - text_width(low) - 16;
-      draw_text(img, x, legend_y, low, black);
-      for (int i = 0; i < bar; ++i) {
-        fill(img, x + text_width(low) + 6 + i, legend_y, x + text_width(low) + 7 + i, legend_y + kTextHeight,
-             scale_color(static_cast<double>(i) / (bar - 1)));
-      }
-      draw_text(img, x + text_width(low) + bar + 12, legend_y, high, black);
-      legend_y += kTextHeight + 4;
-      draw_text(img, width_ - right - text_width(s.name), legend_y, s.name, black);
-      legend_y += kTextHeight + 8;
+  if (!x_label_.empty())
+    text(left + (plot_w - text_width(x_label_)) / 2, height_ - bottom + 32, x_label_, black);
+  if (!y_label_.empty()) text(8, top - 20, y_label_, black);
+  if (!title_.empty()) text(left, 4, title_, black);
+  for (const auto& item : legend) {
+    const Series& s = *item.series;
+    if (s.value.empty()) {
+      line(item.x, item.y + kTextHeight / 2, item.x + 20, item.y + kTextHeight / 2, s.color,
+           kLineWidth + 1);
+      text(item.x + 26, item.y, s.name, black);
       continue;
     }
-    const int x = width_ - right - text_width(s.name) - 32;
-    fill(img, x, legend_y + kTextHeight / 2 - 2, x + 20, legend_y + kTextHeight / 2 + 2, s.color);
-    draw_text(img, x + 26, legend_y, s.name, black);
-    legend_y += kTextHeight + 8;
+    // A coloured series: its lowest value, the scale, its highest value, then its name.
+    text(item.x, item.y, item.low, black);
+    const int bar_x = item.x + text_width(item.low) + 6;
+    for (int i = 0; i < kColourBar; ++i) {
+      fill(img, bar_x + i, item.y, bar_x + i + 1, item.y + kTextHeight,
+           scale_color(static_cast<double>(i) / (kColourBar - 1)));
+    }
+    text(bar_x + kColourBar + 6, item.y, item.high, black);
+    text(bar_x + kColourBar + 6 + text_width(item.high) + 10, item.y, s.name, black);
   }
   return img;
 }

@@ -9,21 +9,26 @@ namespace app {
 
 // A line plot rendered into an RGB image: axes scaled to the data with a margin around it,
 // ticks at round values with their numbers, axis titles, polylines in given colours or
-// coloured by a value along them (with a colour bar), labelled markers and a legend. Enough
+// coloured by a value along them (with a colour bar), labelled markers and a legend in a band
+// above the plot area (it never hides data). Every label lies whole inside the image. Enough
 // for trajectories and error curves.
 class LinePlot {
  public:
   LinePlot(int width, int height);
-  // Adds a polyline (x[i], y[i]) in an RGB colour; a non-empty name goes into the legend.
+  // Adds a polyline (x[i], y[i]) in an RGB colour, 2 px wide; a non-empty name goes into the
+  // legend. Single-colour polylines are drawn over coloured ones (add_coloured), so a reference
+  // such as ground truth stays visible along the path compared with it.
   void add(const std::vector<double>& x, const std::vector<double>& y, std::array<uint8_t, 3> color,
            std::string name = {});
-  // A polyline coloured by value[i] along it (blue at the lowest, red at the highest), with a
-  // colour bar naming `name` and the range.
+  // A polyline coloured by value[i] along it (blue at the lowest, red at the highest), 5 px wide,
+  // with a colour bar naming `name` and the range.
   void add_coloured(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& value,
                     std::string name);
-  // A filled square marker at (x, y) with a label beside it (start and end of a trajectory).
+  // A filled square marker at (x, y) with a label beside it (start and end of a trajectory):
+  // right of it, or left where the image ends.
   void mark(double x, double y, std::array<uint8_t, 3> color, std::string label);
-  // Keeps one unit the same length on both axes (for top views).
+  // Keeps one unit the same length on both axes (for top views): the data's extent plus a
+  // margin, centred in the plot area, the shorter range widened to fill it.
   void equal_axes(bool equal) { equal_ = equal; }
   void labels(std::string x_label, std::string y_label) {
     x_label_ = std::move(x_label);

@@ -150,16 +150,22 @@ std::vector<LoopEvent> loop_events_from_json(const json& j) {
 
 json totals_to_json(const MappingTotals& t) {
   return {{"keyframes_mapped", t.keyframes_mapped}, {"keyframes_skipped", t.keyframes_skipped},
-          {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
+          {"keyframes_caught_up", t.keyframes_caught_up}, {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
           {"iterations", t.iterations},             {"last_loss", t.last_loss},
           {"mapping_ms", t.mapping_ms}};
 }
 
 MappingTotals totals_from_json(const json& j) {
-  return {j.at("keyframes_mapped").get<std::size_t>(), j.at("keyframes_skipped").get<std::size_t>(),
-          j.at("gaussians_added").get<std::size_t>(),  j.at("gaussians_pruned").get<std::size_t>(),
-          j.at("iterations").get<std::size_t>(),       j.at("last_loss").get<double>(),
-          j.at("mapping_ms").get<double>()};
+  MappingTotals t;
+  t.keyframes_mapped = j.at("keyframes_mapped").get<std::size_t>();
+  t.keyframes_skipped = j.at("keyframes_skipped").get<std::size_t>();
+  t.keyframes_caught_up = j.value("keyframes_caught_up", std::size_t{0});  // absent from older checkpoints
+  t.gaussians_added = j.at("gaussians_added").get<std::size_t>();
+  t.gaussians_pruned = j.at("gaussians_pruned").get<std::size_t>();
+  t.iterations = j.at("iterations").get<std::size_t>();
+  t.last_loss = j.at("last_loss").get<double>();
+  t.mapping_ms = j.at("mapping_ms").get<double>();
+  return t;
 }
 
 // The map's and the optimizer's arrays, in one fixed order (State: const or not).

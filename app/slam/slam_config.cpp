@@ -20,6 +20,7 @@ void SlamConfig::validate() const {
   check.at_least("refine_densify_passes", refine_densify_passes, 0);
   check.at_least("refine_cache_mib", refine_cache_mib, 0.0);
   check.at_least("relocalize_iterations", relocalize_iterations, 0);
+  check.at_least("mapping_backlog_mib", mapping_backlog_mib, 0.0);
   check.at_least("loop_closure.min_separation", loop_closure.min_separation, 1);
   check.at_least("loop_closure.dense_width", loop_closure.dense_width, 16);
   const tracking::PlaceRecognitionConfig& p = loop_closure.places;

@@ -72,6 +72,10 @@ struct SlamConfig {
   // pose, with this many Levenberg-Marquardt iterations at the finest tracking level (0: off,
   // as it cost 0.2 frames/s on teddy for a worse ATE).
   int relocalize_iterations = 0;
+  // Threaded mapping (live): keyframes skipped while mapping fell behind are kept, up to this
+  // many MiB (a 640x480 keyframe takes 4.7 MiB), for SlamSystem::catch_up_mapping() at the end of
+  // the stream; beyond it the oldest are dropped for good.
+  double mapping_backlog_mib = 512;
   LoopClosureConfig loop_closure;
 
   // Throws splat::Error naming the first field out of range ("mapping.window: expected an

@@ -49,6 +49,15 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     cached_mib += mib;
     return *(cache[i] = std::move(f));
   };
+  // map() follows the sweep's Gaussian count: a snapshot is published after each visit that
+  // changed it (the densifying passes only; a copy per visit of the others would cost more than
+  // it tells), so a progress line reading map()->size() sees Gaussians being added.
+  std::size_t published = mapper_.map().size();
+  auto publish = [&] {
+    auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
+    std::lock_guard lock(mutex_);
+    map_ = std::move(snapshot);
+  };
   for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
@@ -60,6 +69,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
                      pass < config_.refine_densify_passes);
       T_world_cam[i] = T_cam_world.inverse();
+      if (mapper_.map().size() != published) publish(), published = mapper_.map().size();
       if (visited) visited(++result.visits, total);
     }
   }
@@ -78,7 +88,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   }
   auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
   std::lock_guard lock(mutex_);
-  map_ = std::move(snapshot);
+  map_ = std::move(snapshot);  // with the poses below, under one lock
   // The refined frames keep their keyframe, at the pose the sweep gave them.
   for (const std::size_t i : frames) {
     if (frames_[i].keyframe != kNoKeyframe) frames_[i].T_keyframe_cam = keyframe_world_[frames_[i].keyframe].inverse() * T_world_cam[i];

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 #ifdef __linux__
 #include <sys/resource.h>
@@ -102,6 +103,10 @@ void SlamSystem::apply_tracker_correction() {
 }
 
 namespace {
+
+double frame_mib(const splat::RgbdFrame& frame) {
+  return static_cast<double>((frame.rgb.size() + frame.depth.size()) * sizeof(float)) / (1 << 20);
+}
 
 // The information of an odometry edge, made positive definite: a direction the alignment could
 // not observe (a flat wall's slide) gets a vanishing weight rather than none.
@@ -310,7 +315,15 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   } else if (job) {
     {
       std::lock_guard lock(mutex_);
-      if (pending_) ++totals_.keyframes_skipped;  // mapping fell behind: the newer one replaces it
+      if (pending_) {  // mapping fell behind: the newer one replaces it, the older waits for the end
+        ++totals_.keyframes_skipped;
+        backlog_mib_ += frame_mib(pending_->frame);
+        backlog_.push_back(std::move(*pending_));
+        while (!backlog_.empty() && backlog_mib_ > config_.mapping_backlog_mib) {
+          backlog_mib_ -= frame_mib(backlog_.front().frame);
+          backlog_.pop_front();
+        }
+      }
       pending_ = std::move(job);
     }
     wake_.notify_one();
@@ -419,6 +432,39 @@ void SlamSystem::wait_for_mapping() {
     idle_.wait(lock, [&] { return (!pending_ && !busy_) || !thread_.joinable(); });
   }
   rethrow_mapping_error();
+}
+
+std::size_t SlamSystem::mapping_backlog() const {
+  std::lock_guard lock(mutex_);
+  return backlog_.size();
+}
+
+std::size_t SlamSystem::catch_up_mapping(const std::function<void(std::size_t, std::size_t)>& mapped,
+                                         const std::function<bool()>& stop) {
+  wait_for_mapping();  // the mapper is then this thread's: tracking has ended, the queue is empty
+  std::deque<KeyframeJob> jobs;
+  {
+    std::lock_guard lock(mutex_);
+    jobs = std::exchange(backlog_, {});
+    backlog_mib_ = 0;
+  }
+  std::size_t done = 0;
+  for (KeyframeJob& job : jobs) {
+    if (stop && stop()) break;
+    {
+      std::lock_guard lock(mutex_);
+      job.T_world_cam = keyframe_world_[job.keyframe];  // as loops and mapping have moved it since
+    }
+    map_keyframe(job);
+    {
+      std::lock_guard lock(mutex_);
+      --totals_.keyframes_skipped;
+      ++totals_.keyframes_caught_up;
+    }
+    if (mapped) mapped(++done, jobs.size());
+  }
+  apply_tracker_correction();
+  return done;
 }
 
 void SlamSystem::finish() {

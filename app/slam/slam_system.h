@@ -5,12 +5,15 @@
 //   frame is tracked, so a run is deterministic;
 // - threaded (`gslam live`): mapping runs on a thread of its own with its own rasterizer.
 //   Keyframes wait in a one-slot queue; a newer keyframe replaces a waiting one (counted as
-//   skipped), so tracking never waits for mapping and memory stays bounded.
+//   skipped), so tracking never waits for mapping. Skipped keyframes are kept in a backlog
+//   bounded in memory (SlamConfig::mapping_backlog_mib), which catch_up_mapping() maps once the
+//   stream has ended.
 // Frames whose tracking failed never become keyframes, so a bad pose does not corrupt the map.
 // The system owns every pose: each frame is held relative to the keyframe it followed, and
 // keyframes move as mapping refines them, carrying their frames along, in both modes.
 #pragma once
 #include <condition_variable>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -41,7 +44,8 @@ struct LoopEvent {
 // What mapping did over a run.
 struct MappingTotals {
   std::size_t keyframes_mapped = 0;
-  std::size_t keyframes_skipped = 0;  // threaded: replaced in the queue by a newer keyframe
+  std::size_t keyframes_skipped = 0;  // threaded: replaced in the queue, and not (yet) mapped
+  std::size_t keyframes_caught_up = 0;  // of those, mapped later by catch_up_mapping()
   std::size_t gaussians_added = 0, gaussians_pruned = 0;
   std::size_t iterations = 0;
   double last_loss = 0;  // the last window step's loss
@@ -69,6 +73,12 @@ class SlamSystem {
   void wait_for_mapping();
   // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.
   void finish();
+  // Threaded, after the last process(): maps the skipped keyframes of the backlog, oldest first,
+  // at their current poses, calling mapped(done, total) after each; stops early (keeping what
+  // it did) once stop() returns true. Returns how many it mapped. Rethrows a mapping error.
+  std::size_t catch_up_mapping(const std::function<void(std::size_t, std::size_t)>& mapped = {},
+                               const std::function<bool()>& stop = {});
+  std::size_t mapping_backlog() const;  // skipped keyframes waiting for catch_up_mapping()
 
   // The map as last mapped: empty until the first keyframe is, never null; shared, so a reader
   // keeps it.
@@ -176,6 +186,8 @@ class SlamSystem {
   std::vector<std::pair<std::size_t, splat::RgbdFrame>> thumbnails_;  // keyframe, at dense_width
   splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;
   std::optional<KeyframeJob> pending_;
+  std::deque<KeyframeJob> backlog_;  // skipped keyframes, oldest first
+  double backlog_mib_ = 0;
   bool busy_ = false, stop_ = false;
   std::exception_ptr error_;
   std::condition_variable wake_, idle_;

@@ -31,38 +31,12 @@ splat::Camera view_camera(const LiveViewState& state, const ViewCamera& view) {
   return cam;
 }
 
-// A pixel-space rectangle drawing is clipped to.
-struct Panel {
-  int x0, y0, x1, y1;
-};
-constexpr Panel kMapPanel{0, 0, kMapPanelWidth, kLiveViewHeight};
-constexpr Panel kTopPanel{kMapPanelWidth, kLiveViewHeight / 2, kLiveViewWidth, kLiveViewHeight};
+constexpr PixelRect kMapPanel{0, 0, kMapPanelWidth, kLiveViewHeight};
+constexpr PixelRect kTopPanel{kMapPanelWidth, kLiveViewHeight / 2, kLiveViewWidth, kLiveViewHeight};
 
-void put(splat::Image8& image, const Panel& panel, int x, int y, const uint8_t rgb[3]) {
-  if (x < panel.x0 || y < panel.y0 || x >= panel.x1 || y >= panel.y1) return;
+void put(splat::Image8& image, const PixelRect& clip, int x, int y, const uint8_t rgb[3]) {
+  if (x < clip.x0 || y < clip.y0 || x >= clip.x1 || y >= clip.y1) return;
   for (int c = 0; c < 3; ++c) image.at(x, y, c) = rgb[c];
-}
-
-// Line of width 2 between two pixels.
-void line(splat::Image8& image, const Panel& panel, Eigen::Vector2d a, Eigen::Vector2d b,
-          const uint8_t rgb[3]) {
-  const int steps = static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff())) + 1;
-  for (int s = 0; s <= steps; ++s) {
-    const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(s) / steps);
-    const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-    put(image, panel, x, y, rgb);
-    put(image, panel, x + 1, y, rgb);
-    put(image, panel, x, y + 1, rgb);
-  }
-}
-
-void square(splat::Image8& image, const Panel& panel, Eigen::Vector2d centre, int half,
-            const uint8_t rgb[3]) {
-  for (int dy = -half; dy <= half; ++dy) {
-    for (int dx = -half; dx <= half; ++dx) {
-      put(image, panel, static_cast<int>(centre.x()) + dx, static_cast<int>(centre.y()) + dy, rgb);
-    }
-  }
 }
 
 // Top view of the trajectory (world x right, z up the panel), fitted into the panel.
@@ -73,7 +47,7 @@ void draw_top_view(splat::Image8& image, const LiveViewState& state) {
     lo = lo.cwiseMin(Eigen::Vector2d(p.x(), p.z()));
     hi = hi.cwiseMax(Eigen::Vector2d(p.x(), p.z()));
   }
-  const Panel& panel = kTopPanel;
+  const PixelRect& panel = kTopPanel;
   const double margin = 16, span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 0.1});
   const double scale = (std::min(panel.x1 - panel.x0, panel.y1 - panel.y0) - 2 * margin) / span;
   const Eigen::Vector2d mid = (lo + hi) / 2;
@@ -83,12 +57,33 @@ void draw_top_view(splat::Image8& image, const LiveViewState& state) {
                            centre.y() - (p.z() - mid.y()) * scale);
   };
   for (std::size_t i = 1; i < state.trajectory.size(); ++i) {
-    line(image, panel, to_px(state.trajectory[i - 1]), to_px(state.trajectory[i]), kTrajectoryRgb);
+    draw_line(image, panel, to_px(state.trajectory[i - 1]), to_px(state.trajectory[i]), kTrajectoryRgb);
   }
-  square(image, panel, to_px(state.T_world_cam.translation()), 3, kCameraRgb);
+  draw_square(image, panel, to_px(state.T_world_cam.translation()), 3, kCameraRgb);
 }
 
 }  // namespace
+
+void draw_line(splat::Image8& image, const PixelRect& clip, Eigen::Vector2d a, Eigen::Vector2d b,
+               const uint8_t rgb[3]) {
+  const int steps = static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff())) + 1;
+  for (int s = 0; s <= steps; ++s) {
+    const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(s) / steps);
+    const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+    put(image, clip, x, y, rgb);
+    put(image, clip, x + 1, y, rgb);
+    put(image, clip, x, y + 1, rgb);
+  }
+}
+
+void draw_square(splat::Image8& image, const PixelRect& clip, Eigen::Vector2d centre, int half,
+                 const uint8_t rgb[3]) {
+  for (int dy = -half; dy <= half; ++dy) {
+    for (int dx = -half; dx <= half; ++dx) {
+      put(image, clip, static_cast<int>(centre.x()) + dx, static_cast<int>(centre.y()) + dy, rgb);
+    }
+  }
+}
 
 splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& view,
                                 splat::Rasterizer& rasterizer) {
@@ -117,11 +112,11 @@ splat::Image8 compose_live_view(const LiveViewState& state, const ViewCamera& vi
   for (std::size_t i = 1; i < state.trajectory.size(); ++i) {
     Eigen::Vector2d a, b;
     if (project(state.trajectory[i - 1], a) && project(state.trajectory[i], b)) {
-      line(out, kMapPanel, a, b, kTrajectoryRgb);
+      draw_line(out, kMapPanel, a, b, kTrajectoryRgb);
     }
   }
   Eigen::Vector2d here;
-  if (project(state.T_world_cam.translation(), here)) square(out, kMapPanel, here, 4, kCameraRgb);
+  if (project(state.T_world_cam.translation(), here)) draw_square(out, kMapPanel, here, 4, kCameraRgb);
   draw_top_view(out, state);
   // The input frame, scaled (nearest) into the 320x240 top-right panel.
   const splat::Image8& in = state.input;

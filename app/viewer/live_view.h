@@ -34,6 +34,17 @@ inline constexpr int kMapPanelWidth = 640;
 inline constexpr uint8_t kTrajectoryRgb[3] = {255, 255, 0};
 inline constexpr uint8_t kCameraRgb[3] = {255, 0, 0};
 
+// Drawing over a composed picture, shared with the map viewer (map_view.h): a pixel rectangle
+// [x0, x1) x [y0, y1) that drawing is clipped to, a line of width 2 between two pixel
+// positions, and a filled square of side 2 * half + 1 about a pixel.
+struct PixelRect {
+  int x0, y0, x1, y1;
+};
+void draw_line(splat::Image8& image, const PixelRect& clip, Eigen::Vector2d a, Eigen::Vector2d b,
+               const uint8_t rgb[3]);
+void draw_square(splat::Image8& image, const PixelRect& clip, Eigen::Vector2d centre, int half,
+                 const uint8_t rgb[3]);
+
 // [kLiveViewHeight, kLiveViewWidth, 3]: the map panel (kMapPanelWidth wide, rendered at half
 // resolution and doubled) with the trajectory and current camera, the input frame scaled into
 // the top right, and a top view of the trajectory (world x, z) in the bottom right.

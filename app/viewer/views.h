@@ -45,8 +45,29 @@ std::vector<splat::Camera> orbit_cameras(const MapExtent& extent, int n, int wid
 //   each camera's own axes: x right, y down, z forward), so that every view is one the camera
 //   did not take.
 Eigen::Vector3d camera_up(const std::vector<Eigen::Isometry3d>& poses);
+// As above, about `up` (world frame, made unit) instead of camera_up(poses).
 std::vector<splat::Camera> orbit_at_camera_height(const MapExtent& extent, const std::vector<Eigen::Isometry3d>& poses,
                                                   int n, const Intrinsics& k);
+std::vector<splat::Camera> orbit_at_camera_height(const MapExtent& extent, const std::vector<Eigen::Isometry3d>& poses,
+                                                  int n, const Intrinsics& k, const Eigen::Vector3d& up);
+
+// The world's up direction for a run's map and camera poses (camera-to-world), in the world frame.
+struct WorldUp {
+  enum class Source { kCameras, kFloorPlane };
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // unit
+  Source source = Source::kCameras;
+  // "cameras" or "floor plane", as summary.json records it.
+  const char* source_name() const { return source == Source::kFloorPlane ? "floor plane" : "cameras"; }
+};
+// Starts from camera_up(poses) and refines it by the floor where the map has one: planes among
+// the Gaussians' means (at most kWorldUpMaxPoints of them, evenly strided) are found by RANSAC
+// (fixed seed: deterministic), kept when their normal lies within 30 degrees of the cameras' up,
+// they hold at least 5% of the means and 80% of the cameras are above them; of those holding at
+// least half as many means as the largest, the lowest is the floor, and its least-squares normal
+// (pointing to the cameras) is the up. Otherwise the cameras' up. Throws splat::Error when
+// there are no poses or they agree on no up direction.
+inline constexpr std::size_t kWorldUpMaxPoints = 20000;
+WorldUp estimate_world_up(const std::vector<Eigen::Isometry3d>& poses, const splat::Gaussians& map);
 std::vector<Eigen::Isometry3d> novel_path(const std::vector<Eigen::Isometry3d>& poses, int views,
                                           const Eigen::Vector3d& offset_cam, int half_window = 8);
 

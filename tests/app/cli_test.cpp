@@ -259,22 +259,26 @@ TEST(CliRender, RefusesRendersThatWouldNotFitInMemory) {
 namespace {
 
 // Ctrl-C during reconstruct: it stops taking frames and writes complete outputs, saying so.
+// The run is interrupted once its first frame is reported; it has 39 to go, each with heavy mapping.
 TEST(CliReconstruct, CtrlCWritesCompleteOutputs) {
-  if (!gslam::test::program_available("timeout")) GTEST_SKIP() << "coreutils timeout not found";
   TempDir dir;
   app::SyntheticOptions o;
   o.frames = 40;
   app::write_synthetic_sequence(dir / "seq", o);
-  // Heavy mapping, so that 3 s cover a few of the 40 frames.
   gslam::test::write_text(dir / "slow.json", R"({"mapping": {"iterations": 300}})");
-  const RunResult r = gslam::test::run_command("timeout --preserve-status -s INT 3 " + std::string(GSLAM_BINARY) +
-                                               " reconstruct " + (dir / "seq").string() + " --out " + (dir / "run").string() +
-                                               " --config " + (dir / "slow.json").string());
+  const auto r = gslam::test::run_and_interrupt(std::string(GSLAM_BINARY) + " reconstruct " + (dir / "seq").string() +
+                                                    " --out " + (dir / "run").string() + " --config " + (dir / "slow.json").string(),
+                                                "reconstruct 1/40");
+  ASSERT_TRUE(r.event_seen) << r.output;
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("interrupted: writing what was done"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("continue with: gslam reconstruct --resume --out"), std::string::npos) << r.output;
   std::ifstream in(dir / "run" / "summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);
-  EXPECT_TRUE(s.at("complete").get<bool>());
+  EXPECT_FALSE(s.at("complete").get<bool>()) << "an interrupted run can be resumed: it is not complete";
   EXPECT_TRUE(s.at("interrupted").get<bool>());
+  EXPECT_NE(s.at("resume").get<std::string>().find("--resume"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "checkpoint.bin"));
   EXPECT_LT(s.at("frames").get<std::size_t>(), 40u);
   EXPECT_GT(s.at("gaussians").get<std::size_t>(), 0u);
   EXPECT_TRUE(std::filesystem::exists(dir / "run" / "map.ply"));
@@ -284,7 +288,6 @@ TEST(CliReconstruct, CtrlCWritesCompleteOutputs) {
 // Ctrl-C, then --resume: the run ends with the trajectory and map of a run never interrupted,
 // wherever the interrupt fell (while taking frames or in the sweep).
 TEST(CliReconstruct, ResumeAfterCtrlCEndsAsTheUninterruptedRun) {
-  if (!gslam::test::program_available("timeout")) GTEST_SKIP() << "coreutils timeout not found";
   TempDir dir;
   app::SyntheticOptions o;
   o.frames = 16;
@@ -292,8 +295,9 @@ TEST(CliReconstruct, ResumeAfterCtrlCEndsAsTheUninterruptedRun) {
   gslam::test::write_text(dir / "slow.json", R"({"refine_passes": 2, "mapping": {"iterations": 60}})");
   const std::string args = " reconstruct " + (dir / "seq").string() + " --config " + (dir / "slow.json").string();
   ASSERT_EQ(run_gslam(args + " --out " + (dir / "straight").string()).exit_code, 0);
-  const RunResult stopped = gslam::test::run_command("timeout --preserve-status -s INT 1.5 " + std::string(GSLAM_BINARY) +
-                                                     args + " --out " + (dir / "resumed").string());
+  const auto stopped = gslam::test::run_and_interrupt(std::string(GSLAM_BINARY) + args + " --out " + (dir / "resumed").string(),
+                                                      "reconstruct 1/16");
+  ASSERT_TRUE(stopped.event_seen) << stopped.output;
   ASSERT_EQ(stopped.exit_code, 0) << stopped.output;
   ASSERT_TRUE(std::filesystem::exists(dir / "resumed" / "checkpoint.bin")) << stopped.output;
   // A plain re-run into the folder names --resume; --resume takes no other input.

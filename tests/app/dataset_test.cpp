@@ -44,6 +44,14 @@ TEST(TumDataset, RealSequenceSkipsMissingFilesAndFindsGroundTruth) {
   EXPECT_EQ(d.intrinsics.width, 640);
   EXPECT_GT(d.skipped_missing, 4000u) << "rgb.txt/depth.txt list the whole sequence";
   EXPECT_EQ(d.entries.size(), 193u) << "SOURCE.md: 193 colour frames have depth within 20 ms";
+  // The folder holds the first 200 of the 2409 listed frames: a subset, reported, not a warning.
+  EXPECT_EQ(d.listed, 2409u);
+  EXPECT_EQ(d.missing_colour, 2209u);
+  EXPECT_EQ(d.unmatched, 7u);
+  EXPECT_EQ(
+      d.frames_used(),
+      "193 frames used (of 2409 listed; 2209 have no colour image here, 7 no depth within 0.02 s)");
+  EXPECT_TRUE(d.warnings.empty()) << d.warnings.front();
   std::size_t with_truth = 0;
   for (const auto& e : d.entries) with_truth += e.T_world_cam_truth.has_value();
   EXPECT_EQ(with_truth, 189u) << "SOURCE.md: 189 also have ground truth";
@@ -61,10 +69,77 @@ TEST(TumDataset, UnknownCameraAndBadFoldersAreErrors) {
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery"), "unknown TUM camera", "--intrinsics");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "nothing"), "nothing", "does not exist");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir.path()), "not a dataset folder");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery"), "or write intrinsics.txt");
   // With intrinsics given, the missing images leave no frame.
   app::DatasetOptions options;
   options.intrinsics = "500,500,320,240";
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery", options), "no frame has both colour and depth");
+}
+
+// A folder matching no layout: one line naming every layout and what this folder lacks.
+TEST(Dataset, UnknownFolderErrorNamesEveryLayoutAndWhatIsMissing) {
+  TempDir dir;
+  const std::vector<std::string> layouts = {
+      "TUM RGB-D (rgb.txt + depth.txt",
+      "groundtruth.txt",
+      "--intrinsics",
+      "intrinsics.txt 'fx fy cx cy'",
+      "results/frameNNNNNN.jpg + results/depthNNNNNN.png + traj.txt",
+      "docs/guide.md"};
+  auto expect_error = [&](const std::filesystem::path& folder, const std::string& missing) {
+    try {
+      app::open_dataset(folder);
+      ADD_FAILURE() << folder << ": no error";
+    } catch (const splat::Error& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
+      EXPECT_NE(message.find("not a dataset folder (" + missing + ")"), std::string::npos)
+          << message;
+      for (const auto& l : layouts)
+        EXPECT_NE(message.find(l), std::string::npos) << "lacks '" << l << "': " << message;
+    }
+  };
+  for (const char* folder : {"empty", "lists", "pngs", "other"})
+    std::filesystem::create_directories(dir / folder);
+  expect_error(dir / "empty", "is empty");
+  gslam::test::write_text(dir / "lists" / "rgb.txt", "1.0 rgb/1.png\n");
+  expect_error(dir / "lists", "has rgb.txt but no depth.txt");
+  gslam::test::write_text(dir / "pngs" / "a.png", "");
+  gslam::test::write_text(dir / "pngs" / "b.PNG", "");
+  expect_error(dir / "pngs", "has 2 image files but no rgb.txt and depth.txt listing them");
+  std::filesystem::create_directories(dir / "folders" / "rgb");
+  std::filesystem::create_directories(dir / "folders" / "depth");
+  expect_error(dir / "folders",
+               "has rgb/ or depth/ but no rgb.txt and depth.txt listing their images");
+  std::filesystem::create_directories(dir / "replica" / "results");
+  expect_error(dir / "replica", "has results/ but no traj.txt");
+  gslam::test::write_text(dir / "other" / "notes.md", "");
+  expect_error(dir / "other", "has none of rgb.txt, depth.txt, traj.txt, results/");
+}
+
+// Where the listed frames went, and warnings only for real problems.
+TEST(Dataset, CountsUnusedFramesAndWarnsOnGroundTruthFromAnotherClock) {
+  TempDir dir;
+  write_small_sequence(dir / "seq");
+  const app::Dataset all = app::open_dataset(dir / "seq");
+  EXPECT_EQ(all.frames_used(), "3 frames");
+  EXPECT_TRUE(all.warnings.empty());
+  app::DatasetOptions options;
+  options.max_frames = 2;
+  EXPECT_EQ(app::open_dataset(dir / "seq", options).frames_used(),
+            "2 frames used (of 3 listed; 1 beyond --max-frames)");
+  gslam::test::write_text(dir / "seq" / "groundtruth.txt",
+                          "5000.0 0 0 0 0 0 0 1\n5001.0 0 0 0 0 0 0 1\n");
+  const app::Dataset shifted = app::open_dataset(dir / "seq");
+  EXPECT_FALSE(shifted.has_ground_truth());
+  ASSERT_EQ(shifted.warnings.size(), 1u);
+  EXPECT_NE(shifted.warnings[0].find("groundtruth.txt: no pose within 0.02 s of any frame"),
+            std::string::npos)
+      << shifted.warnings[0];
+  // Lists naming no file here: the error says how many were listed and why none is used.
+  gslam::test::write_text(dir / "seq" / "rgb.txt", "1.0 rgb/gone.png\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"),
+                     "no frame has both colour and depth (1 listed: 1 have no colour image here)");
 }
 
 TEST(SyntheticSequence, WritesAReadableSequenceWithExactGroundTruth) {

@@ -1,8 +1,12 @@
 #include "support/run_command.h"
 
+#include <poll.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 
@@ -15,6 +19,50 @@ RunResult run_command(const std::string& command) {
   std::array<char, 4096> buf;
   while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
   const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+InterruptedRun run_and_interrupt(const std::string& command, const std::string& event, double timeout_s) {
+  InterruptedRun r;
+  int fds[2];
+  if (::pipe(fds) != 0) return r;
+  const pid_t pid = ::fork();
+  if (pid < 0) return r;
+  if (pid == 0) {  // the child: its own process group, output into the pipe
+    ::setpgid(0, 0);
+    ::dup2(fds[1], STDOUT_FILENO);
+    ::dup2(fds[1], STDERR_FILENO);
+    ::close(fds[0]);
+    ::close(fds[1]);
+    // exec: the shell becomes the program, which alone decides what SIGINT does.
+    ::execl("/bin/sh", "sh", "-c", ("exec " + command).c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::setpgid(pid, pid);  // also here, so the group exists before any kill below
+  ::close(fds[1]);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  bool interrupted = false;
+  std::array<char, 4096> buf;
+  for (;;) {
+    pollfd p{fds[0], POLLIN, 0};
+    const int ready = ::poll(&p, 1, 100);
+    if (ready > 0) {
+      const ssize_t n = ::read(fds[0], buf.data(), buf.size());
+      if (n <= 0) break;  // the program and everything it started closed their output
+      r.output.append(buf.data(), static_cast<std::size_t>(n));
+    }
+    if (!interrupted) {
+      r.event_seen = r.output.find(event) != std::string::npos;
+      if (r.event_seen || std::chrono::steady_clock::now() > deadline) {
+        ::kill(-pid, SIGINT);
+        interrupted = true;
+      }
+    }
+  }
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }

@@ -11,6 +11,15 @@ struct RunResult {
 // Runs a shell command and collects its output and exit code.
 RunResult run_command(const std::string& command);
 
+// Runs a shell command, and once its output (stdout and stderr) contains `event`, sends SIGINT
+// to its process group, as Ctrl-C in a terminal would; then collects the rest of its output and
+// its exit code. The interrupt follows what the program did, not a clock; if the event never
+// comes within `timeout_s` (a hung program), it is interrupted then and `event_seen` is false.
+struct InterruptedRun : RunResult {
+  bool event_seen = false;
+};
+InterruptedRun run_and_interrupt(const std::string& command, const std::string& event, double timeout_s = 900);
+
 // Whether a program is on PATH.
 bool program_available(const std::string& name);
 
