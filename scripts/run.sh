@@ -11,7 +11,7 @@ scripts/install_deps.sh
 scripts/build.sh --target gslam
 out=out/synthetic
 build/app/gslam reconstruct --out "$out" --overwrite
-build/app/gslam eval "$out" --dataset "$out/synthetic_input"
-build/app/gslam render "$out/map.ply" --out "$out/views" --trajectory "$out/trajectory.txt" \
-  --intrinsics 260,260,160,120,320,240 --format png,exr
+build/app/gslam eval "$out"
+# The map seen from the estimated camera poses, with the run's own camera.
+build/app/gslam render "$out" --out "$out/views" --path recorded --format png,exr --overwrite
 echo "outputs in $out: trajectory.txt, map.ply, map.glb, keyframes/, summary.json, eval.json, plots, views/"

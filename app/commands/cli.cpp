@@ -109,8 +109,9 @@ int run_cli(int argc, char** argv) {
   ReconstructOptions recon;
   CLI::App* recon_cmd = cli.add_subcommand("reconstruct", "RGB-D SLAM: trajectory and Gaussian map from a sequence");
   recon_cmd->add_option("dataset", recon.dataset,
-                        "Sequence folder: TUM RGB-D, Replica, or a plain rgb/ depth/ intrinsics.txt folder (README: "
-                        "bringing your own data); default: the bundled synthetic sequence");
+                        "Sequence folder: TUM RGB-D (rgb.txt, depth.txt), the plain folder (the same lists + "
+                        "intrinsics.txt), images (rgb/, depth/, intrinsics.txt) or Replica (results/, traj.txt); "
+                        "docs/guide.md shows each; default: the bundled synthetic sequence");
   recon_cmd->add_option("--out", recon.out, "Output directory (required unless --print-config)");
   recon_cmd->add_flag("--overwrite", recon.overwrite, "Replace the outputs of another run in --out");
   recon_cmd->add_flag("--resume", recon.resume, "Continue the interrupted run in --out from its checkpoint");

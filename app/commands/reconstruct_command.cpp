@@ -74,12 +74,10 @@ int run_reconstruct(const ReconstructOptions& o) {
   const SlamConfig& config = plan.config;
   const std::filesystem::path& input = plan.input;
   const Dataset dataset = open_dataset(input, plan.dataset_options);
-  std::fprintf(stderr, "dataset %s (%s): %zu frames at %dx%d%s", input.c_str(), dataset.format.c_str(),
-               dataset.entries.size(), dataset.intrinsics.width, dataset.intrinsics.height,
+  std::fprintf(stderr, "dataset %s (%s): %s at %dx%d%s\n", input.c_str(), dataset.format.c_str(),
+               dataset.frames_used().c_str(), dataset.intrinsics.width, dataset.intrinsics.height,
                dataset.has_ground_truth() ? ", with ground truth" : "");
-  if (dataset.skipped_missing > 0) std::fprintf(stderr, ", %zu listed files missing (skipped)", dataset.skipped_missing);
-  if (dataset.unmatched > 0) std::fprintf(stderr, ", %zu colour frames without depth", dataset.unmatched);
-  std::fprintf(stderr, "\n");
+  for (const std::string& w : dataset.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
   std::string note;
   auto rasterizer = make_rasterizer(o.backend, note);

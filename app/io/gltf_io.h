@@ -33,8 +33,8 @@ struct GltfSplatScene {
 };
 
 // Reads every KHR_gaussian_splatting primitive of a .gltf or .glb file, in the scene's frame (node
-// transforms applied), except that a node marked as write_gltf marks its axis rotation keeps
-// its own transform out: gslam's files read back in the frame gslam wrote them from. SCALE is linear and
+// transforms applied), except the transform of a node carrying write_gltf's axis-rotation mark:
+// gslam's own files read back in the world frame they were written from. SCALE is linear and
 // never negative in the extension's text since April 2026; drafts before it stored log-scales,
 // and their writers COLOR_0 as display (sRGB-encoded) values. The rule: a file with any negative
 // SCALE value was written to an older draft, and all its SCALEs are read as log-scales and its

@@ -17,6 +17,8 @@ constexpr double kZoomPerStep = 0.9;
 // Frustum depth as a fraction of the radius holding map and cameras: visible in the overview,
 // small beside the map.
 constexpr double kFrustumDepth = 0.06;
+// Frusta whose centre is nearer the view than this many frustum depths are left out.
+constexpr double kMarkerClearance = 3;
 
 // The overview's intrinsics (as orbit_cameras: fx = 0.8 * width).
 Intrinsics default_intrinsics() {
@@ -222,13 +224,16 @@ splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view,
   }
   const Intrinsics k = scene.intrinsics.value_or(default_intrinsics());
   const double depth = kFrustumDepth * scene_radius(scene);
-  const std::size_t step = (n + kMaxCameraMarkers - 1) / kMaxCameraMarkers;
-  for (std::size_t i = 0; i < n; i += std::max<std::size_t>(1, step)) {
-    if (static_cast<int>(i) != view.camera) draw_frustum(out, cam, scene.cameras[i], k, depth, kCameraMarkerRgb);
-  }
-  if (n > 1 && (n - 1) % std::max<std::size_t>(1, step) != 0 && static_cast<int>(n - 1) != view.camera) {
-    draw_frustum(out, cam, scene.cameras[n - 1], k, depth, kCameraMarkerRgb);  // the last, always
-  }
+  const std::size_t step = std::max<std::size_t>(1, (n + kMaxCameraMarkers - 1) / kMaxCameraMarkers);
+  const auto marker = [&](std::size_t i) {
+    // A frustum about the eye would cover the picture with its lines (the cameras beside the
+    // one shown, a few centimetres apart).
+    const double distance = (scene.cameras[i].translation() - view.T_world_view.translation()).norm();
+    if (static_cast<int>(i) == view.camera || distance < kMarkerClearance * depth) return;
+    draw_frustum(out, cam, scene.cameras[i], k, depth, kCameraMarkerRgb);
+  };
+  for (std::size_t i = 0; i < n; i += step) marker(i);
+  if (n > 1 && (n - 1) % step != 0) marker(n - 1);  // the last, always
   return out;
 }
 

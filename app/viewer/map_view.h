@@ -78,8 +78,9 @@ splat::Camera render_camera(const MapViewCamera& view, const MapScene& scene, in
 // [kMapViewHeight, kMapViewWidth, 3]: the map rendered from the view (at 1/downsample of the
 // resolution and enlarged, for quick redraws while the view moves) over a dark background, the
 // trajectory through the recorded cameras, and a frustum for each of them (at most
-// kMaxCameraMarkers, evenly spaced, and the last; not the one shown), 6% as deep as the radius
-// that holds the map and the cameras.
+// kMaxCameraMarkers, evenly spaced, and the last), 6% as deep as the radius that holds the map
+// and the cameras; frusta within three depths of the view (the one shown, its neighbours) are
+// left out.
 splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view,
                                splat::Rasterizer& rasterizer, int downsample = 1);
 

@@ -1,6 +1,8 @@
 // The gslam executable end to end: outputs on good input, one-line errors and non-zero exits
 // on bad input.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -12,8 +14,11 @@
 #include "io/ply_io.h"
 #include "io/run_folder.h"
 #include "app/run_gslam.h"
+#include "io/trajectory.h"
+#include "support/golden_case.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
+#include "support/test_data.h"
 
 namespace {
 
@@ -62,6 +67,98 @@ TEST(CliRender, TrajectoryWithIntrinsicsRendersOneViewPerPose) {
                                 " --trajectory " + (dir / "traj.txt").string() + " --intrinsics 60,60,32,24,64,48");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "view_0001.png"));
+}
+
+// gsplat's golden render through the command line: the map as a PLY, its camera as a one-pose
+// TUM trajectory with --intrinsics. A named trajectory is rendered at its poses: every pixel
+// matches gsplat within the golden tolerance plus the PNG's 8-bit rounding.
+TEST(CliRender, TrajectoryRendersGsplatsGoldenViewAtItsPose) {
+  GSLAM_REQUIRE_SHARED_DATA(path, "gsplat_reference_render_brush/basic_case.safetensors");
+  const gslam::test::GoldenCase golden = gslam::test::load_golden_case(path);
+  TempDir dir;
+  app::write_ply(dir / "map.ply", golden.gaussians);
+  app::write_tum_trajectory(dir / "camera.txt", {{0.0, golden.camera.T_cam_world.inverse()}});
+  const splat::Camera& k = golden.camera;
+  char intrinsics[200];
+  std::snprintf(intrinsics, sizeof intrinsics, "%.17g,%.17g,%.17g,%.17g,%d,%d", k.fx, k.fy, k.cx, k.cy, k.width, k.height);
+  const RunResult r = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "out").string() + " --trajectory " +
+                                (dir / "camera.txt").string() + " --intrinsics " + intrinsics + " --backend cpu");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path: recorded, at the 1 poses of"), std::string::npos) << "the output says which path: " << r.output;
+  const splat::Image8 png = app::read_png_rgb8(dir / "out" / "view_0000.png");
+  ASSERT_EQ(png.width, k.width);
+  ASSERT_EQ(png.height, k.height);
+  const auto& ref = golden.tensor("out_img").values;  // [H, W, 4]
+  float worst = 0;
+  for (int y = 0; y < k.height; ++y) {
+    for (int x = 0; x < k.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const float expected = std::clamp(ref[(static_cast<std::size_t>(y) * k.width + x) * 4 + c], 0.f, 1.f);
+        const float got = png.at(x, y, c) / 255.f;
+        const float tolerance = 0.5f / 255 + gslam::test::kGoldenAtol + gslam::test::kGoldenRtol * expected;
+        worst = std::max(worst, std::abs(got - expected));
+        EXPECT_NEAR(got, expected, tolerance) << "pixel " << x << "," << y << " channel " << c;
+      }
+    }
+  }
+  std::printf("golden view through the CLI: worst difference %.2f/255\n", 255 * worst);
+  // --path novel is what moves the views off the trajectory.
+  const RunResult novel = run_gslam("render " + (dir / "map.ply").string() + " --out " + (dir / "novel").string() +
+                                    " --trajectory " + (dir / "camera.txt").string() + " --intrinsics " + intrinsics +
+                                    " --path novel --backend cpu");
+  ASSERT_EQ(novel.exit_code, 0) << novel.output;
+  EXPECT_NE(novel.output.find("path: novel"), std::string::npos) << novel.output;
+  EXPECT_NE(app::read_png_rgb8(dir / "novel" / "view_0000.png").data, png.data) << "a novel view is another view";
+}
+
+// A render folder holds one render: views of an earlier one are refused, and replaced with
+// --overwrite (which leaves other files alone).
+TEST(CliRender, RefusesAFolderWithAnEarlierRenderUnlessOverwrite) {
+  TempDir dir;
+  app::write_ply(dir / "map.ply", small_map());
+  const std::string render = "render " + (dir / "map.ply").string() + " --out " + (dir / "out").string() + " --size 40x30 --backend cpu";
+  ASSERT_EQ(run_gslam(render + " --orbit 6").exit_code, 0);
+  gslam::test::write_text(dir / "out" / "notes.txt", "mine\n");
+  const RunResult again = run_gslam(render + " --orbit 2");
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_NE(again.output.find("holds 6 files of an earlier render"), std::string::npos) << again.output;
+  EXPECT_NE(again.output.find("--overwrite"), std::string::npos) << again.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "view_0005.png")) << "a refused render changes nothing";
+  const RunResult replaced = run_gslam(render + " --orbit 2 --overwrite");
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "view_0001.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "view_0002.png")) << "no stale view is left beside the new ones";
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "notes.txt")) << "only render outputs are removed";
+}
+
+// gslam --version: the release, the commit it was built from and the backends built in.
+TEST(Cli, VersionNamesReleaseCommitAndBackends) {
+  const RunResult r = run_gslam("--version");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("gslam 0.", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find("(commit "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("backends: cpu"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("viewer: "), std::string::npos) << r.output;
+}
+
+// The CLI's own mistakes: one line that names the mistake and the nearest valid name.
+TEST(Cli, SuggestsTheNearestCommandAndOption) {
+  const RunResult command = run_gslam("reconstuct --out x");
+  EXPECT_NE(command.exit_code, 0);
+  EXPECT_EQ(command.output, "error: unknown command 'reconstuct'; did you mean 'reconstruct'? (gslam --help lists them)\n");
+  const RunResult option = run_gslam("live somewhere --out x --max-frame 10");
+  EXPECT_NE(option.exit_code, 0);
+  EXPECT_EQ(option.output,
+            "error: gslam live: unknown option '--max-frame'; did you mean '--max-frames'? (gslam live --help lists them)\n");
+  const RunResult far = run_gslam("render m.ply --out x --zzzzzz");
+  EXPECT_NE(far.exit_code, 0);
+  EXPECT_EQ(far.output, "error: gslam render: unknown option '--zzzzzz' (gslam render --help lists them)\n");
+  const RunResult none = run_gslam("");
+  EXPECT_NE(none.exit_code, 0);
+  EXPECT_NE(none.output.find("error: give a command: render, reconstruct"), std::string::npos) << none.output;
+  const RunResult missing = run_gslam("render --out x");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_EQ(missing.output, "error: gslam render: map is required\n");
 }
 
 // A video of an orbit of the bundled demo map (a donut): H.264 with one frame per view, as

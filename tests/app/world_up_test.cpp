@@ -78,8 +78,8 @@ struct Room {
     std::vector<Eigen::Isometry3d> poses;
     for (int k = 0; k < 10; ++k) {
       Eigen::Matrix3d level;
-      level.col(2) = a;                             // forward
-      level.col(1) = -up;                           // image down
+      level.col(2) = a;                                 // forward
+      level.col(1) = -up;                               // image down
       level.col(0) = level.col(1).cross(level.col(2));  // right
       Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
       T.linear() = level * Eigen::AngleAxisd(20.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -173,7 +173,8 @@ TEST(GltfWorldUp, WrittenUprightAndReadBackInTheWorldFrame) {
   const tinygltf::Node& node = model.nodes[0];
   ASSERT_EQ(node.rotation.size(), 4u);
   const Eigen::Quaterniond stored(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
-  EXPECT_LT((stored * up.normalized() - Eigen::Vector3d::UnitY()).norm(), 1e-9) << "stored up " << (stored * up).transpose();
+  EXPECT_LT((stored * up.normalized() - Eigen::Vector3d::UnitY()).norm(), 1e-9)
+      << "stored up " << (stored * up).transpose();
   EXPECT_TRUE(node.matrix.empty() && node.translation.empty() && node.scale.empty());
 
   // gslam reads it back in the world frame it was written from, bit for bit.
@@ -198,7 +199,9 @@ TEST(GltfWorldUp, WrittenUprightAndReadBackInTheWorldFrame) {
   for (std::size_t i = 0; i < map.size(); ++i) {
     const Eigen::Vector3d p(map.means[i * 3], map.means[i * 3 + 1], map.means[i * 3 + 2]);
     const Eigen::Vector3d expected = q * p;
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(turned.means[i * 3 + static_cast<std::size_t>(c)], expected[c], 1e-5) << "splat " << i;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(turned.means[i * 3 + static_cast<std::size_t>(c)], expected[c], 1e-5) << "splat " << i;
+    }
   }
 }
 
