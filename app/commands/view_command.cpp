@@ -36,7 +36,8 @@ struct LoadedScene {
 };
 
 LoadedScene load_scene(const ViewOptions& o) {
-  if (!std::filesystem::exists(o.path)) throw splat::Error(o.path.string() + ": no such file or folder");
+  if (!std::filesystem::exists(o.path))
+    throw splat::Error(o.path.string() + ": no such file or folder");
   std::filesystem::path map_path = o.path;
   std::vector<Eigen::Isometry3d> cameras;
   std::vector<double> timestamps;
@@ -44,7 +45,8 @@ LoadedScene load_scene(const ViewOptions& o) {
   if (std::filesystem::is_directory(o.path)) {  // a run folder
     map_path = o.path / "map.ply";
     if (!std::filesystem::exists(map_path)) {
-      throw splat::Error(map_path.string() + ": no such file (expected a gslam run folder, or a .ply/.glb/.gltf map)");
+      throw splat::Error(map_path.string() +
+                         ": no such file (expected a gslam run folder, or a .ply/.glb/.gltf map)");
     }
     const std::filesystem::path trajectory = o.path / "trajectory.txt";
     if (std::filesystem::exists(trajectory)) {
@@ -61,7 +63,8 @@ LoadedScene load_scene(const ViewOptions& o) {
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   std::string up_source = "default; --up x,y,z sets it";
   if (!o.up.empty()) {
-    if (o.up.size() != 3) throw splat::Error("--up: expected x,y,z, got " + std::to_string(o.up.size()) + " numbers");
+    if (o.up.size() != 3)
+      throw splat::Error("--up: expected x,y,z, got " + std::to_string(o.up.size()) + " numbers");
     up = Eigen::Vector3d(o.up[0], o.up[1], o.up[2]);
     up_source = "--up";
   } else if (!cameras.empty()) {
@@ -69,13 +72,15 @@ LoadedScene load_scene(const ViewOptions& o) {
     up = world_up.up;
     up_source = std::string("estimated from the ") + world_up.source_name();
   }
-  return {make_map_scene(std::move(map.gaussians), std::move(cameras), std::move(timestamps), intrinsics, up),
+  return {make_map_scene(std::move(map.gaussians), std::move(cameras), std::move(timestamps),
+                         intrinsics, up),
           up_source};
 }
 
 // The window's title: what is shown and from where.
 std::string title_of(const ViewOptions& o, const MapScene& scene, const MapViewCamera& view) {
-  std::string title = "gslam view: " + o.path.string() + ", " + std::to_string(scene.map.size()) + " Gaussians";
+  std::string title =
+      "gslam view: " + o.path.string() + ", " + std::to_string(scene.map.size()) + " Gaussians";
   const std::size_t n = scene.cameras.size();
   if (view.camera >= 0) {
     const std::size_t i = static_cast<std::size_t>(view.camera);
@@ -86,7 +91,8 @@ std::string title_of(const ViewOptions& o, const MapScene& scene, const MapViewC
       title += stamp;
     }
   } else {
-    title += n > 0 ? " - free view (" + std::to_string(n) + " cameras: n/p steps through them, Home: overview)"
+    title += n > 0 ? " - free view (" + std::to_string(n) +
+                         " cameras: n/p steps through them, Home: overview)"
                    : " - free view (Home: overview)";
   }
   return title;
@@ -103,8 +109,9 @@ int run_view(const ViewOptions& o) {
   std::string note;
   auto rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
-  std::fprintf(stderr, "view: %zu Gaussians, %zu cameras%s, up %.3f,%.3f,%.3f (%s)\n", scene.map.size(),
-               scene.cameras.size(), scene.intrinsics ? "" : " (intrinsics unknown)", scene.up.x(), scene.up.y(),
+  std::fprintf(stderr, "view: %zu Gaussians, %zu cameras%s, up %.3f,%.3f,%.3f (%s)\n",
+               scene.map.size(), scene.cameras.size(),
+               scene.intrinsics ? "" : " (intrinsics unknown)", scene.up.x(), scene.up.y(),
                scene.up.z(), loaded.up_source.c_str());
 
   const int cameras = static_cast<int>(scene.cameras.size());
@@ -116,7 +123,8 @@ int run_view(const ViewOptions& o) {
     window.poll();
     const ViewerInput in = window.take_input();
     const Clock::time_point now = Clock::now();
-    const double dt = std::min(kMaxFlyStepSeconds, std::chrono::duration<double>(now - last).count());
+    const double dt =
+        std::min(kMaxFlyStepSeconds, std::chrono::duration<double>(now - last).count());
     last = now;
     if (in.overview) view = overview_view(scene);
     if (in.camera_step != 0 && cameras > 0) {
@@ -127,7 +135,8 @@ int run_view(const ViewOptions& o) {
     if (in.pan_dx != 0 || in.pan_dy != 0) pan_view(view, in.pan_dx, in.pan_dy);
     if (in.zoom_steps != 0) zoom_view(view, scene, in.zoom_steps);
     if (!in.fly.isZero()) {
-      const double metres = kFlyRadiiPerSecond * scene.extent.radius * dt * (in.fast ? kFastFactor : 1);
+      const double metres =
+          kFlyRadiiPerSecond * scene.extent.radius * dt * (in.fast ? kFastFactor : 1);
       fly_view(view, scene, in.fly.cast<double>() * metres);
     }
     if (view.camera >= 0) last_camera = view.camera;

@@ -8,7 +8,7 @@
 namespace app {
 
 struct ViewOptions {
-  std::filesystem::path path;        // a map file (.ply, .glb, .gltf), or a reconstruct/live run folder
+  std::filesystem::path path;  // a map file (.ply, .glb, .gltf), or a reconstruct/live run folder
   std::filesystem::path screenshot;  // save the first frame drawn to this PNG and exit
   std::optional<int> camera;         // start at this recorded camera (0-based, a trajectory line)
   std::vector<double> up;            // x,y,z; empty: estimated from the cameras, else +z

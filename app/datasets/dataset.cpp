@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <unordered_map>
 
 #include "io/file_error.h"
 #include "io/image_io.h"
@@ -59,6 +61,35 @@ void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
   cam.height = image.height;
 }
 
+// gslam's intrinsics.txt: "fx fy cx cy" in pixels on one line.
+void read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
+  std::ifstream in(path);
+  double k[4];
+  if (!(in >> k[0] >> k[1] >> k[2] >> k[3]) || !(k[0] > 0) || !(k[1] > 0) || !std::isfinite(k[0]) ||
+      !std::isfinite(k[1]) || !std::isfinite(k[2]) || !std::isfinite(k[3])) {
+    fail(path, "expected 'fx fy cx cy'");
+  }
+  cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
+}
+
+// Optional ROOT/groundtruth.txt (TUM trajectory) associated with d.entries by timestamp within
+// 0.02 s, as TUM's tools do. A file matching no frame (another clock) is a warning.
+void attach_ground_truth(Dataset& d) {
+  const std::filesystem::path path = d.root / "groundtruth.txt";
+  if (!std::filesystem::exists(path)) return;
+  const std::vector<StampedPose> truth = read_tum_trajectory(path);
+  std::vector<double> truth_t, frame_t;
+  for (const auto& p : truth) truth_t.push_back(p.timestamp);
+  for (const auto& e : d.entries) frame_t.push_back(e.timestamp);
+  const auto pairs = associate(frame_t, truth_t);
+  for (const auto& [f, g] : pairs) d.entries[f].T_world_cam_truth = truth[g].T_world_cam;
+  if (!truth.empty() && !d.entries.empty() && pairs.empty()) {
+    d.warnings.push_back(
+        path.string() +
+        ": no pose within 0.02 s of any frame (another clock?); the frames have no ground truth");
+  }
+}
+
 Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& options) {
   Dataset d;
   d.format = "tum";
@@ -69,11 +100,7 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   if (!options.intrinsics.empty()) {
     apply_intrinsics(d.intrinsics, options.intrinsics);
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
-    // gslam's extension of the TUM layout: "fx fy cx cy" on one line.
-    std::ifstream in(root / "intrinsics.txt");
-    double k[4];
-    if (!(in >> k[0] >> k[1] >> k[2] >> k[3]) || k[0] <= 0 || k[1] <= 0) fail(root / "intrinsics.txt", "expected 'fx fy cx cy'");
-    d.intrinsics.fx = k[0], d.intrinsics.fy = k[1], d.intrinsics.cx = k[2], d.intrinsics.cy = k[3];
+    read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
   } else if (name.find("freiburg1") != std::string::npos) {
     d.intrinsics.fx = 517.3, d.intrinsics.fy = 516.5, d.intrinsics.cx = 318.6, d.intrinsics.cy = 255.3;
   } else if (name.find("freiburg2") != std::string::npos) {
@@ -105,23 +132,10 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
                          " of " + std::to_string(rgb.size()) +
                          " colour images have no depth image within 0.02 s");
   }
-  std::vector<StampedPose> truth;
-  if (std::filesystem::exists(root / "groundtruth.txt")) truth = read_tum_trajectory(root / "groundtruth.txt");
-  std::vector<double> truth_t;
-  for (const auto& p : truth) truth_t.push_back(p.timestamp);
-  std::vector<double> frame_t;
-  for (const auto& [i, j] : pairs) frame_t.push_back(rgb[i].timestamp);
-  std::vector<std::optional<Eigen::Isometry3d>> frame_truth(pairs.size());
-  const auto truth_pairs = associate(frame_t, truth_t);
-  for (const auto& [f, g] : truth_pairs) frame_truth[f] = truth[g].T_world_cam;
-  if (!truth.empty() && !pairs.empty() && truth_pairs.empty()) {
-    d.warnings.push_back(
-        (root / "groundtruth.txt").string() +
-        ": no pose within 0.02 s of any frame (another clock?); the frames have no ground truth");
+  for (const auto& [i, j] : pairs) {
+    d.entries.push_back({rgb[i].timestamp, root / rgb[i].file, root / depth[j].file, std::nullopt});
   }
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    d.entries.push_back({rgb[pairs[k].first].timestamp, root / rgb[pairs[k].first].file, root / depth[pairs[k].second].file, frame_truth[k]});
-  }
+  attach_ground_truth(d);
   return d;
 }
 
@@ -181,31 +195,150 @@ Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& op
   return d;
 }
 
+// ".png" for "a.PNG".
+std::string lowercase_extension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+bool is_colour_image(const std::filesystem::path& file) {
+  const std::string ext = lowercase_extension(file);
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
+// The images of ROOT/rgb (colour: .png, .jpg, .jpeg) and ROOT/depth (.png), any case of
+// extension; one directory listing each, so thousands of files cost two reads of a directory.
+// A folder that does not exist lists nothing.
+struct ImageFolder {
+  std::vector<std::filesystem::path> colour, depth;
+};
+
+ImageFolder list_image_folder(const std::filesystem::path& root) {
+  ImageFolder out;
+  const auto list = [](const std::filesystem::path& dir, bool (*wanted)(const std::filesystem::path&),
+                       std::vector<std::filesystem::path>& files) {
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+      std::error_code type_ec;
+      if (e.is_regular_file(type_ec) && wanted(e.path())) files.push_back(e.path());
+    }
+  };
+  list(root / "rgb", is_colour_image, out.colour);
+  list(root / "depth", [](const std::filesystem::path& f) { return lowercase_extension(f) == ".png"; },
+       out.depth);
+  return out;
+}
+
+// The stem as a number ("1341841873.273798", "-2", "1e3"), if all of it is one and finite.
+std::optional<double> stem_number(const std::string& stem) {
+  double value = 0;
+  const char* end = stem.data() + stem.size();
+  const auto [ptr, ec] = std::from_chars(stem.data(), end, value);
+  if (ec != std::errc() || ptr != end || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+// A folder of images as a camera driver writes it for `live --watch`: rgb/NAME.png|jpg and
+// depth/NAME.png paired by identical stem NAME, intrinsics.txt "fx fy cx cy" (or --intrinsics),
+// optional groundtruth.txt. When every frame's stem is a number it is the timestamp in seconds
+// and frames are in numeric order; otherwise frames are in name order, stamped index / 30 s.
+Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder,
+                    const DatasetOptions& options) {
+  Dataset d;
+  d.format = "images";
+  d.root = root;
+  d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;  // as TUM and --watch
+  if (!options.intrinsics.empty()) {
+    apply_intrinsics(d.intrinsics, options.intrinsics);
+  } else if (std::filesystem::exists(root / "intrinsics.txt")) {
+    read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
+  } else {
+    fail(root / "intrinsics.txt",
+         "not found: a folder of images (rgb/, depth/) needs the camera, 'fx fy cx cy' in "
+         "pixels in this file, or --intrinsics fx,fy,cx,cy");
+  }
+  // Two files with one stem would make the pairing ambiguous.
+  const auto same_stem = [](const std::filesystem::path& dir, const std::filesystem::path& a,
+                            const std::filesystem::path& b) {
+    fail(dir, a.filename().string() + " and " + b.filename().string() +
+                  " have the same name stem; keep one");
+  };
+  std::unordered_map<std::string, std::filesystem::path> depth_by_stem;
+  depth_by_stem.reserve(folder.depth.size());
+  for (const auto& p : folder.depth) {
+    const auto [it, inserted] = depth_by_stem.emplace(p.stem().string(), p);
+    if (!inserted) same_stem(root / "depth", it->second, p);
+  }
+  struct Frame {
+    std::string stem;
+    std::optional<double> number;
+    std::filesystem::path rgb, depth;
+  };
+  std::vector<Frame> frames;
+  std::unordered_map<std::string, std::filesystem::path> colour_by_stem;
+  colour_by_stem.reserve(folder.colour.size());
+  for (const auto& p : folder.colour) {
+    std::string stem = p.stem().string();
+    const auto [it, inserted] = colour_by_stem.emplace(stem, p);
+    if (!inserted) same_stem(root / "rgb", it->second, p);
+    ++d.listed;
+    const auto depth = depth_by_stem.find(stem);
+    if (depth == depth_by_stem.end()) {
+      ++d.unmatched;
+      continue;
+    }
+    const std::optional<double> number = stem_number(stem);
+    frames.push_back({std::move(stem), number, p, depth->second});
+  }
+  const bool numeric =
+      std::all_of(frames.begin(), frames.end(), [](const Frame& f) { return f.number.has_value(); });
+  std::sort(frames.begin(), frames.end(), [&](const Frame& a, const Frame& b) {
+    if (numeric && *a.number != *b.number) return *a.number < *b.number;
+    return a.stem < b.stem;
+  });
+  d.entries.reserve(frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    // Without timestamps in the names: 30 Hz, the usual RGB-D camera rate (Replica's convention).
+    const double t = numeric ? *frames[k].number : static_cast<double>(k) / 30.0;
+    d.entries.push_back({t, frames[k].rgb, frames[k].depth, std::nullopt});
+  }
+  // Most colour images without depth: the names disagree, not a few frames lost.
+  if (d.unmatched > 0 && 2 * d.unmatched > d.listed) {
+    d.warnings.push_back((root / "depth").string() + ": " + std::to_string(d.unmatched) + " of " +
+                         std::to_string(d.listed) +
+                         " colour images in rgb/ have no depth image of the same name");
+  }
+  attach_ground_truth(d);
+  return d;
+}
+
 // What a folder that matches no layout has and lacks, for open_dataset's error.
-std::string what_is_missing(const std::filesystem::path& root) {
+std::string what_is_missing(const std::filesystem::path& root, const ImageFolder& images) {
   namespace fs = std::filesystem;
   const auto has = [&](const char* name) { return fs::exists(root / name); };
   if (has("rgb.txt")) return "has rgb.txt but no depth.txt";
   if (has("depth.txt")) return "has depth.txt but no rgb.txt";
   if (has("traj.txt")) return "has traj.txt but no results/ folder";
   if (fs::is_directory(root / "results")) return "has results/ but no traj.txt";
-  if (fs::is_directory(root / "rgb") || fs::is_directory(root / "depth")) {
-    return "has rgb/ or depth/ but no rgb.txt and depth.txt listing their images";
-  }
-  std::size_t entries = 0, images = 0;
+  const bool rgb_dir = fs::is_directory(root / "rgb"), depth_dir = fs::is_directory(root / "depth");
+  if (rgb_dir && !depth_dir) return "has rgb/ but no depth/";
+  if (depth_dir && !rgb_dir) return "has depth/ but no rgb/";
+  if (rgb_dir && images.colour.empty()) return "has rgb/ and depth/ but no .png or .jpg image in rgb/";
+  if (depth_dir) return "has rgb/ and depth/ but no .png image in depth/";
+  std::size_t entries = 0, found = 0;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(root, ec)) {
     ++entries;
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    images += ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+    found += is_colour_image(e.path());
   }
-  if (images > 0) {
-    return "has " + std::to_string(images) + " image files but no rgb.txt and depth.txt listing them";
+  if (found > 0) {
+    return "has " + std::to_string(found) +
+           " image files but no rgb/ and depth/ holding them, nor rgb.txt and depth.txt listing them";
   }
   if (entries == 0) return "is empty";
-  return "has none of rgb.txt, depth.txt, traj.txt, results/";
+  return "has none of rgb.txt, depth.txt, rgb/, depth/, traj.txt, results/";
 }
 
 }  // namespace
@@ -251,7 +384,7 @@ std::string unused_frames(const Dataset& d) {
     if (n > 0) out += (out.empty() ? "" : ", ") + std::to_string(n) + why;
   };
   add(d.missing_colour, " have no colour image here");
-  add(d.unmatched, d.format == "replica" ? " no depth image" : " no depth within 0.02 s");
+  add(d.unmatched, d.format == "tum" ? " no depth within 0.02 s" : " no depth image");
   add(d.beyond_max_frames, " beyond --max-frames");
   return out;
 }
@@ -271,11 +404,11 @@ bool Dataset::has_ground_truth() const {
 splat::RgbdFrame Dataset::load(std::size_t i) const {
   const DatasetEntry& e = entries.at(i);
   const splat::Image8 rgb = read_rgb8(e.rgb);
-  const splat::Image16 depth = read_png_gray16(e.depth);
   if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
     fail(e.rgb, "image is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) + ", expected " +
                     std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
   }
+  const splat::Image16 depth = read_png_gray16(e.depth);
   if (depth.width != rgb.width || depth.height != rgb.height) {
     fail(e.depth, "depth is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + ", colour is " +
                       std::to_string(rgb.width) + "x" + std::to_string(rgb.height));
@@ -305,13 +438,19 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
     d = open_tum(root, options);
   } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {
     d = open_replica(root, options);
+  } else if (ImageFolder images = list_image_folder(root);
+             !std::filesystem::exists(root / "rgb.txt") && !std::filesystem::exists(root / "depth.txt") &&
+             !images.colour.empty() && !images.depth.empty()) {
+    d = open_images(root, images, options);
   } else {
-    fail(root, "not a dataset folder (" + what_is_missing(root) +
+    fail(root, "not a dataset folder (" + what_is_missing(root, images) +
                    "); accepted: TUM RGB-D (rgb.txt + depth.txt, lines 'timestamp path', "
                    "optional groundtruth.txt; camera from freiburg1/2/3 in the path or "
                    "--intrinsics), the plain folder (the same lists + intrinsics.txt 'fx fy cx "
-                   "cy'), Replica (results/frameNNNNNN.jpg + results/depthNNNNNN.png + "
-                   "traj.txt); see docs/guide.md");
+                   "cy'), a folder of images (rgb/NAME.png|jpg + depth/NAME.png paired by name, "
+                   "NAME the timestamp in seconds, + intrinsics.txt), Replica "
+                   "(results/frameNNNNNN.jpg + results/depthNNNNNN.png + traj.txt); see "
+                   "docs/guide.md");
   }
   if (d.entries.empty()) {
     fail(root, "no frame has both colour and depth (" +

@@ -24,7 +24,7 @@ struct DatasetEntry {
 
 // An RGB-D sequence on disk: entries in time order, loaded one frame at a time.
 struct Dataset {
-  std::string format;  // "tum" (the plain folder too), "replica"; "watched" for live --watch
+  std::string format;  // "tum" (the plain folder too), "images", "replica"; "watched" for live --watch
   std::filesystem::path root;
   splat::Camera intrinsics; // pose unused
   double depth_scale = 5000;
@@ -32,9 +32,10 @@ struct Dataset {
   // Where the listed frames went: listed = entries.size() + missing_colour + unmatched +
   // beyond_max_frames. A folder holding part of a sequence (lists for all of it, images for some)
   // is normal and not a warning.
-  std::size_t listed = 0;          // colour frames listed (rgb.txt lines; Replica frame*.jpg found)
+  std::size_t listed = 0;  // colour frames listed (rgb.txt lines; images in rgb/; Replica frame*.jpg)
   std::size_t missing_colour = 0;  // listed colour frames whose image file does not exist
-  std::size_t unmatched = 0;       // colour images present without depth (TUM: none within 0.02 s)
+  std::size_t unmatched = 0;  // colour images present without depth (TUM: none within 0.02 s;
+                              // images: no depth/ image of the same stem)
   std::size_t beyond_max_frames = 0;  // frames left out by --max-frames
   std::size_t skipped_missing = 0;    // listed files (colour and depth) that do not exist
   // Real problems found while opening (ground truth matching no frame, most colour images
@@ -51,16 +52,19 @@ struct Dataset {
   bool has_ground_truth() const;
 };
 
-// Opens a dataset folder, detecting its format: TUM RGB-D (rgb.txt, depth.txt, optional
-// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), the plain folder (the
-// same lists plus intrinsics.txt "fx fy cx cy"), or Replica as used by NICE-SLAM/SplaTAM
-// (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5, traj.txt). An unknown camera without
-// --intrinsics is an error, never a guess. A folder that matches no layout is an error naming
-// every layout and what the folder lacks.
 // Intrinsics "fx,fy,cx,cy" with the image size of the colour image `rgb`. Throws splat::Error
 // naming the text or the file.
 splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb);
 
+// Opens a dataset folder, detecting its format: TUM RGB-D (rgb.txt, depth.txt, optional
+// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), the plain folder (the
+// same lists plus intrinsics.txt "fx fy cx cy"), a folder of images without lists ("images":
+// rgb/NAME.{png,jpg,jpeg} + depth/NAME.png paired by identical stem NAME, intrinsics.txt or
+// --intrinsics, optional groundtruth.txt, depth / 5000 by default; numeric stems are timestamps in
+// seconds and ordered as numbers, otherwise frames are in name order stamped index / 30 s), or
+// Replica as used by NICE-SLAM/SplaTAM (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5,
+// traj.txt). An unknown camera without --intrinsics is an error, never a guess. A folder that
+// matches no layout is an error naming every layout and what the folder lacks.
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options = {});
 
 // TUM's association: each colour frame paired with the nearest unused depth frame within

@@ -22,13 +22,14 @@ constexpr double kMarkerClearance = 3;
 
 // The overview's intrinsics (as orbit_cameras: fx = 0.8 * width).
 Intrinsics default_intrinsics() {
-  return {0.8 * kMapViewWidth, 0.8 * kMapViewWidth, kMapViewWidth / 2.0, kMapViewHeight / 2.0, kMapViewWidth,
-          kMapViewHeight};
+  return {0.8 * kMapViewWidth,  0.8 * kMapViewWidth, kMapViewWidth / 2.0,
+          kMapViewHeight / 2.0, kMapViewWidth,       kMapViewHeight};
 }
 
 // Recorded intrinsics scaled to fit the picture, the image centred in it.
 Intrinsics fit_to_picture(const Intrinsics& k) {
-  const double s = std::min(static_cast<double>(kMapViewWidth) / k.width, static_cast<double>(kMapViewHeight) / k.height);
+  const double s = std::min(static_cast<double>(kMapViewWidth) / k.width,
+                            static_cast<double>(kMapViewHeight) / k.height);
   return {k.fx * s,
           k.fy * s,
           k.cx * s + (kMapViewWidth - k.width * s) / 2,
@@ -61,8 +62,10 @@ void draw_segment(splat::Image8& out, const splat::Camera& cam, const Eigen::Vec
         continue;
       }
       const double r = q / p;
-      if (p < 0) t0 = std::max(t0, r);
-      else t1 = std::min(t1, r);
+      if (p < 0)
+        t0 = std::max(t0, r);
+      else
+        t1 = std::min(t1, r);
     }
   }
   if (t0 > t1) return;
@@ -70,12 +73,15 @@ void draw_segment(splat::Image8& out, const splat::Camera& cam, const Eigen::Vec
 }
 
 // A camera as a pyramid: its centre joined to its image corners at `depth` metres.
-void draw_frustum(splat::Image8& out, const splat::Camera& cam, const Eigen::Isometry3d& T_world_cam,
-                  const Intrinsics& k, double depth, const uint8_t rgb[3]) {
-  const double u[4] = {0, 1.0 * k.width, 1.0 * k.width, 0}, v[4] = {0, 0, 1.0 * k.height, 1.0 * k.height};
+void draw_frustum(splat::Image8& out, const splat::Camera& cam,
+                  const Eigen::Isometry3d& T_world_cam, const Intrinsics& k, double depth,
+                  const uint8_t rgb[3]) {
+  const double u[4] = {0, 1.0 * k.width, 1.0 * k.width, 0},
+               v[4] = {0, 0, 1.0 * k.height, 1.0 * k.height};
   Eigen::Vector3d corner[4];
   for (int c = 0; c < 4; ++c) {
-    corner[c] = T_world_cam * Eigen::Vector3d((u[c] - k.cx) / k.fx * depth, (v[c] - k.cy) / k.fy * depth, depth);
+    corner[c] = T_world_cam *
+                Eigen::Vector3d((u[c] - k.cx) / k.fx * depth, (v[c] - k.cy) / k.fy * depth, depth);
   }
   for (int c = 0; c < 4; ++c) {
     draw_segment(out, cam, T_world_cam.translation(), corner[c], rgb);
@@ -83,21 +89,26 @@ void draw_frustum(splat::Image8& out, const splat::Camera& cam, const Eigen::Iso
   }
 }
 
-double distance_to_pivot(const MapViewCamera& view) { return (view.pivot - view.T_world_view.translation()).norm(); }
+double distance_to_pivot(const MapViewCamera& view) {
+  return (view.pivot - view.T_world_view.translation()).norm();
+}
 
 // The radius about the map's centre that holds the map and every camera.
 double scene_radius(const MapScene& scene) {
   double radius = scene.extent.radius;
-  for (const auto& T : scene.cameras) radius = std::max(radius, (T.translation() - scene.extent.center).norm());
+  for (const auto& T : scene.cameras)
+    radius = std::max(radius, (T.translation() - scene.extent.center).norm());
   return radius;
 }
 
 }  // namespace
 
-MapScene make_map_scene(splat::Gaussians map, std::vector<Eigen::Isometry3d> cameras, std::vector<double> timestamps,
-                        std::optional<Intrinsics> intrinsics, const Eigen::Vector3d& up) {
+MapScene make_map_scene(splat::Gaussians map, std::vector<Eigen::Isometry3d> cameras,
+                        std::vector<double> timestamps, std::optional<Intrinsics> intrinsics,
+                        const Eigen::Vector3d& up) {
   if (map.empty()) throw splat::Error("view: the map has no Gaussians");
-  if (!up.allFinite() || !(up.norm() > 0)) throw splat::Error("view: the up vector is zero or not finite");
+  if (!up.allFinite() || !(up.norm() > 0))
+    throw splat::Error("view: the up vector is zero or not finite");
   if (!timestamps.empty() && timestamps.size() != cameras.size()) {
     throw splat::Error("view: " + std::to_string(timestamps.size()) + " timestamps for " +
                        std::to_string(cameras.size()) + " cameras");
@@ -121,7 +132,8 @@ MapViewCamera overview_view(const MapScene& scene) {
   heading -= heading.dot(up) * up;
   heading = heading.norm() > 1e-6 ? heading.normalized() : Eigen::Vector3d(-up.unitOrthogonal());
   const double distance = 2.5 * radius, elevation = 25.0 * M_PI / 180.0;
-  const Eigen::Vector3d eye = center + distance * (-std::cos(elevation) * heading + std::sin(elevation) * up);
+  const Eigen::Vector3d eye =
+      center + distance * (-std::cos(elevation) * heading + std::sin(elevation) * up);
   MapViewCamera view;
   view.T_world_view = look_at(eye, center, up);
   view.pivot = center;
@@ -133,12 +145,14 @@ MapViewCamera recorded_view(const MapScene& scene, int i) {
   const int n = static_cast<int>(scene.cameras.size());
   if (i < 0 || i >= n) {
     throw splat::Error("view: camera " + std::to_string(i) + " is not recorded" +
-                       (n == 0 ? std::string(": the map has no cameras") : ", expected 0 to " + std::to_string(n - 1)));
+                       (n == 0 ? std::string(": the map has no cameras")
+                               : ", expected 0 to " + std::to_string(n - 1)));
   }
   MapViewCamera view;
   view.T_world_view = scene.cameras[static_cast<std::size_t>(i)];
   view.k = scene.intrinsics ? fit_to_picture(*scene.intrinsics) : default_intrinsics();
-  const Eigen::Vector3d eye = view.T_world_view.translation(), axis = view.T_world_view.linear().col(2);
+  const Eigen::Vector3d eye = view.T_world_view.translation(),
+                        axis = view.T_world_view.linear().col(2);
   const double r = scene.extent.radius;
   view.pivot = eye + std::clamp((scene.extent.center - eye).dot(axis), 0.1 * r, 3 * r) * axis;
   view.camera = i;
@@ -157,8 +171,8 @@ void orbit_view(MapViewCamera& view, const MapScene& scene, double dx_px, double
   azimuth -= kOrbitRadiansPerPixel * dx_px;
   elevation = std::clamp(elevation + kOrbitRadiansPerPixel * dy_px, -kMaxElevation, kMaxElevation);
   const Eigen::Vector3d eye =
-      view.pivot +
-      d * (std::cos(elevation) * (std::cos(azimuth) * a + std::sin(azimuth) * b) + std::sin(elevation) * up);
+      view.pivot + d * (std::cos(elevation) * (std::cos(azimuth) * a + std::sin(azimuth) * b) +
+                        std::sin(elevation) * up);
   view.T_world_view = look_at(eye, view.pivot, up);
   view.camera = -1;
 }
@@ -175,7 +189,8 @@ void pan_view(MapViewCamera& view, double dx_px, double dy_px) {
 
 void zoom_view(MapViewCamera& view, const MapScene& scene, double steps) {
   const double r = scene.extent.radius;
-  const double d = std::clamp(distance_to_pivot(view) * std::pow(kZoomPerStep, steps), 1e-3 * r, 100 * r);
+  const double d =
+      std::clamp(distance_to_pivot(view) * std::pow(kZoomPerStep, steps), 1e-3 * r, 100 * r);
   view.T_world_view.translation() = view.pivot - d * view.T_world_view.linear().col(2);
   view.camera = -1;
 }
@@ -191,7 +206,10 @@ void fly_view(MapViewCamera& view, const MapScene& scene, const Eigen::Vector3d&
 
 splat::Camera render_camera(const MapViewCamera& view, const MapScene& scene, int downsample) {
   const double s = std::max(1, downsample);
-  const Intrinsics k{view.k.fx / s, view.k.fy / s, view.k.cx / s, view.k.cy / s,
+  const Intrinsics k{view.k.fx / s,
+                     view.k.fy / s,
+                     view.k.cx / s,
+                     view.k.cy / s,
                      std::max(1, view.k.width / std::max(1, downsample)),
                      std::max(1, view.k.height / std::max(1, downsample))};
   splat::Camera cam = make_camera(k, view.T_world_view);
@@ -199,8 +217,8 @@ splat::Camera render_camera(const MapViewCamera& view, const MapScene& scene, in
   return cam;
 }
 
-splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view, splat::Rasterizer& rasterizer,
-                               int downsample) {
+splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view,
+                               splat::Rasterizer& rasterizer, int downsample) {
   downsample = std::max(1, downsample);
   splat::Image8 out(kMapViewWidth, kMapViewHeight, 3, 24);
   const splat::Camera low = render_camera(view, scene, downsample);
@@ -210,7 +228,8 @@ splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view,
   for (int y = 0; y < kMapViewHeight; ++y) {
     const int sy = std::min(y / downsample, low.height - 1);
     for (int x = 0; x < kMapViewWidth; ++x) {
-      const std::size_t o = (static_cast<std::size_t>(sy) * low.width + std::min(x / downsample, low.width - 1)) * 3;
+      const std::size_t o =
+          (static_cast<std::size_t>(sy) * low.width + std::min(x / downsample, low.width - 1)) * 3;
       for (int c = 0; c < 3; ++c) {
         out.at(x, y, c) = static_cast<uint8_t>(std::clamp(f.rgb[o + c], 0.f, 1.f) * 255.f + 0.5f);
       }
@@ -220,15 +239,18 @@ splat::Image8 compose_map_view(const MapScene& scene, const MapViewCamera& view,
   const splat::Camera cam = render_camera(view, scene, 1);
   const std::size_t n = scene.cameras.size();
   for (std::size_t i = 1; i < n; ++i) {
-    draw_segment(out, cam, scene.cameras[i - 1].translation(), scene.cameras[i].translation(), kTrajectoryRgb);
+    draw_segment(out, cam, scene.cameras[i - 1].translation(), scene.cameras[i].translation(),
+                 kTrajectoryRgb);
   }
   const Intrinsics k = scene.intrinsics.value_or(default_intrinsics());
   const double depth = kFrustumDepth * scene_radius(scene);
-  const std::size_t step = std::max<std::size_t>(1, (n + kMaxCameraMarkers - 1) / kMaxCameraMarkers);
+  const std::size_t step =
+      std::max<std::size_t>(1, (n + kMaxCameraMarkers - 1) / kMaxCameraMarkers);
   const auto marker = [&](std::size_t i) {
     // A frustum about the eye would cover the picture with its lines (the cameras beside the
     // one shown, a few centimetres apart).
-    const double distance = (scene.cameras[i].translation() - view.T_world_view.translation()).norm();
+    const double distance =
+        (scene.cameras[i].translation() - view.T_world_view.translation()).norm();
     if (static_cast<int>(i) == view.camera || distance < kMarkerClearance * depth) return;
     draw_frustum(out, cam, scene.cameras[i], k, depth, kCameraMarkerRgb);
   };

@@ -27,9 +27,9 @@ inline constexpr int kMaxCameraMarkers = 100;
 // A map and the cameras that made it.
 struct MapScene {
   splat::Gaussians map;
-  std::vector<Eigen::Isometry3d> cameras;  // recorded camera-to-world poses, in order
-  std::vector<double> timestamps;          // seconds, one per camera, or empty
-  std::optional<Intrinsics> intrinsics;    // the recorded camera, where known
+  std::vector<Eigen::Isometry3d> cameras;         // recorded camera-to-world poses, in order
+  std::vector<double> timestamps;                 // seconds, one per camera, or empty
+  std::optional<Intrinsics> intrinsics;           // the recorded camera, where known
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // world up, unit length
   MapExtent extent;                               // map_extent(map)
 };

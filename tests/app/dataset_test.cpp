@@ -1,11 +1,13 @@
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
 #include "datasets/dataset.h"
 #include "commands/evaluation.h"
 #include "io/image_io.h"
+#include "app/run_gslam.h"
 #include "datasets/synthetic_sequence.h"
 #include "splat/se3.h"
 #include "support/expect_error.h"
@@ -85,6 +87,7 @@ TEST(Dataset, UnknownFolderErrorNamesEveryLayoutAndWhatIsMissing) {
       "--intrinsics",
       "intrinsics.txt 'fx fy cx cy'",
       "results/frameNNNNNN.jpg + results/depthNNNNNN.png + traj.txt",
+      "rgb/NAME.png|jpg + depth/NAME.png",
       "docs/guide.md"};
   auto expect_error = [&](const std::filesystem::path& folder, const std::string& missing) {
     try {
@@ -106,15 +109,18 @@ TEST(Dataset, UnknownFolderErrorNamesEveryLayoutAndWhatIsMissing) {
   expect_error(dir / "lists", "has rgb.txt but no depth.txt");
   gslam::test::write_text(dir / "pngs" / "a.png", "");
   gslam::test::write_text(dir / "pngs" / "b.PNG", "");
-  expect_error(dir / "pngs", "has 2 image files but no rgb.txt and depth.txt listing them");
+  expect_error(dir / "pngs", "has 2 image files but no rgb/ and depth/ holding them, nor rgb.txt "
+                             "and depth.txt listing them");
   std::filesystem::create_directories(dir / "folders" / "rgb");
+  expect_error(dir / "folders", "has rgb/ but no depth/");
   std::filesystem::create_directories(dir / "folders" / "depth");
-  expect_error(dir / "folders",
-               "has rgb/ or depth/ but no rgb.txt and depth.txt listing their images");
+  expect_error(dir / "folders", "has rgb/ and depth/ but no .png or .jpg image in rgb/");
+  gslam::test::write_text(dir / "folders" / "rgb" / "1.0.png", "");
+  expect_error(dir / "folders", "has rgb/ and depth/ but no .png image in depth/");
   std::filesystem::create_directories(dir / "replica" / "results");
   expect_error(dir / "replica", "has results/ but no traj.txt");
   gslam::test::write_text(dir / "other" / "notes.md", "");
-  expect_error(dir / "other", "has none of rgb.txt, depth.txt, traj.txt, results/");
+  expect_error(dir / "other", "has none of rgb.txt, depth.txt, rgb/, depth/, traj.txt, results/");
 }
 
 // Where the listed frames went, and warnings only for real problems.
@@ -219,6 +225,175 @@ TEST(ReplicaDataset, ReadsJpegFramesScaledDepthAndMatrixTrajectory) {
 
   gslam::test::write_text(dir / "replica" / "traj.txt", "1 0 0 0 0 1 0 0\n");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "replica", options), "traj.txt", "line 1", "16 numbers");
+}
+
+}  // namespace
+
+namespace {
+
+// The small synthetic sequence at DIR/tum and a copy at DIR/images without rgb.txt and depth.txt.
+void write_tum_and_images(const TempDir& dir) {
+  write_small_sequence(dir / "tum");
+  std::filesystem::copy(dir / "tum", dir / "images", std::filesystem::copy_options::recursive);
+  std::filesystem::remove(dir / "images" / "rgb.txt");
+  std::filesystem::remove(dir / "images" / "depth.txt");
+}
+
+// An 8x6 colour image and depth image at DIR/rgb/NAME and DIR/depth/DEPTH_NAME (none if empty).
+void write_pair(const std::filesystem::path& dir, const std::string& name,
+                const std::string& depth_name) {
+  std::filesystem::create_directories(dir / "rgb");
+  std::filesystem::create_directories(dir / "depth");
+  splat::Image8 rgb(8, 6, 3);
+  for (std::size_t k = 0; k < rgb.data.size(); ++k) rgb.data[k] = static_cast<uint8_t>(k);
+  if (name.ends_with(".jpg")) {
+    app::write_jpeg_rgb8(dir / "rgb" / name, rgb);
+  } else {
+    app::write_png_rgb8(dir / "rgb" / name, rgb);
+  }
+  splat::Image16 depth(8, 6, 1);
+  for (auto& z : depth.data) z = 5000;
+  if (!depth_name.empty()) app::write_png_gray16(dir / "depth" / depth_name, depth);
+}
+
+std::vector<double> timestamps(const app::Dataset& d) {
+  std::vector<double> out;
+  for (const auto& e : d.entries) out.push_back(e.timestamp);
+  return out;
+}
+
+std::vector<std::string> colour_names(const app::Dataset& d) {
+  std::vector<std::string> out;
+  for (const auto& e : d.entries) out.push_back(e.rgb.filename().string());
+  return out;
+}
+
+TEST(ImagesDataset, TumSequenceWithoutListsReadsTheSameFrames) {
+  TempDir dir;
+  write_tum_and_images(dir);
+  const app::Dataset tum = app::open_dataset(dir / "tum");
+  const app::Dataset images = app::open_dataset(dir / "images");
+  EXPECT_EQ(tum.format, "tum");
+  EXPECT_EQ(images.format, "images");
+  EXPECT_TRUE(images.warnings.empty()) << images.warnings.front();
+  EXPECT_EQ(images.frames_used(), "3 frames");
+  EXPECT_DOUBLE_EQ(images.depth_scale, 5000);
+  EXPECT_DOUBLE_EQ(images.intrinsics.fx, tum.intrinsics.fx);
+  EXPECT_DOUBLE_EQ(images.intrinsics.fy, tum.intrinsics.fy);
+  EXPECT_DOUBLE_EQ(images.intrinsics.cx, tum.intrinsics.cx);
+  EXPECT_DOUBLE_EQ(images.intrinsics.cy, tum.intrinsics.cy);
+  EXPECT_EQ(images.intrinsics.width, tum.intrinsics.width);
+  EXPECT_EQ(images.intrinsics.height, tum.intrinsics.height);
+  ASSERT_EQ(images.entries.size(), tum.entries.size());
+  for (std::size_t i = 0; i < tum.entries.size(); ++i) {
+    const app::DatasetEntry &a = tum.entries[i], &b = images.entries[i];
+    EXPECT_DOUBLE_EQ(b.timestamp, a.timestamp) << "frame " << i;
+    EXPECT_EQ(b.rgb.filename(), a.rgb.filename()) << "frame " << i;
+    EXPECT_EQ(b.depth.filename(), a.depth.filename()) << "frame " << i;
+    ASSERT_TRUE(a.T_world_cam_truth && b.T_world_cam_truth) << "frame " << i;
+    EXPECT_TRUE(b.T_world_cam_truth->isApprox(*a.T_world_cam_truth, 1e-12)) << "frame " << i;
+  }
+  const splat::RgbdFrame f = images.load(2), g = tum.load(2);
+  EXPECT_EQ(f.rgb, g.rgb);
+  EXPECT_EQ(f.depth, g.depth);
+  // --intrinsics, --depth-scale and --max-frames apply as to every layout.
+  app::DatasetOptions options;
+  options.intrinsics = "40,41,30,20";
+  options.depth_scale = 1000;
+  options.max_frames = 2;
+  const app::Dataset custom = app::open_dataset(dir / "images", options);
+  EXPECT_DOUBLE_EQ(custom.intrinsics.fy, 41);
+  EXPECT_DOUBLE_EQ(custom.depth_scale, 1000);
+  EXPECT_EQ(custom.frames_used(), "2 frames used (of 3 listed; 1 beyond --max-frames)");
+}
+
+TEST(ImagesDataset, NumericNamesSortAsNumbersOthersByNameAtThirtyHertz) {
+  TempDir dir;
+  for (const std::string stem : {"10.0", "1.5", "2"}) {
+    write_pair(dir / "numbers", stem + ".png", stem + ".png");
+  }
+  gslam::test::write_text(dir / "numbers" / "intrinsics.txt", "10 10 4 3\n");
+  const app::Dataset numbers = app::open_dataset(dir / "numbers");
+  EXPECT_EQ(numbers.format, "images");
+  EXPECT_EQ(colour_names(numbers), (std::vector<std::string>{"1.5.png", "2.png", "10.0.png"}));
+  EXPECT_EQ(timestamps(numbers), (std::vector<double>{1.5, 2.0, 10.0}));
+  EXPECT_EQ(numbers.intrinsics.width, 8);
+
+  // One name that is not a number: every frame in name order, stamped index / 30 s. Colour may be
+  // JPEG; depth is paired by the stem.
+  write_pair(dir / "names", "c10.png", "c10.png");
+  write_pair(dir / "names", "a.jpg", "a.png");
+  write_pair(dir / "names", "c9.png", "c9.png");
+  write_pair(dir / "names", "5.png", "5.png");
+  gslam::test::write_text(dir / "names" / "intrinsics.txt", "10 10 4 3\n");
+  const app::Dataset names = app::open_dataset(dir / "names");
+  EXPECT_EQ(colour_names(names), (std::vector<std::string>{"5.png", "a.jpg", "c10.png", "c9.png"}));
+  const std::vector<double> t = timestamps(names);
+  ASSERT_EQ(t.size(), 4u);
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_DOUBLE_EQ(t[i], static_cast<double>(i) / 30.0) << "frame " << i;
+  EXPECT_EQ(names.load(1).width(), 8);
+}
+
+TEST(ImagesDataset, ColourWithoutDepthIsCountedAndWarnedOnlyWhenMost) {
+  TempDir dir;
+  write_tum_and_images(dir);
+  std::filesystem::remove(std::filesystem::directory_iterator(dir / "images" / "depth")->path());
+  const app::Dataset one = app::open_dataset(dir / "images");
+  EXPECT_EQ(one.listed, 3u);
+  EXPECT_EQ(one.unmatched, 1u);
+  EXPECT_EQ(one.entries.size(), 2u);
+  EXPECT_EQ(one.frames_used(), "2 frames used (of 3 listed; 1 no depth image)");
+  EXPECT_TRUE(one.warnings.empty()) << one.warnings.front();
+  std::filesystem::remove(std::filesystem::directory_iterator(dir / "images" / "depth")->path());
+  const app::Dataset most = app::open_dataset(dir / "images");
+  EXPECT_EQ(most.unmatched, 2u);
+  ASSERT_EQ(most.warnings.size(), 1u);
+  EXPECT_NE(most.warnings[0].find("2 of 3 colour images in rgb/ have no depth image of the same name"),
+            std::string::npos)
+      << most.warnings[0];
+}
+
+TEST(ImagesDataset, MissingIntrinsicsIsAOneLineErrorNamingTheFile) {
+  TempDir dir;
+  write_tum_and_images(dir);
+  std::filesystem::remove(dir / "images" / "intrinsics.txt");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "images"), "intrinsics.txt: not found", "'fx fy cx cy'",
+                     "--intrinsics fx,fy,cx,cy");
+  try {
+    app::open_dataset(dir / "images");
+    ADD_FAILURE() << "no error without intrinsics.txt";
+  } catch (const splat::Error& e) {
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+  }
+  app::DatasetOptions options;
+  options.intrinsics = "52,52,32,24";
+  EXPECT_EQ(app::open_dataset(dir / "images", options).entries.size(), 3u);
+  // Two colour images with one stem: the pairing would be ambiguous.
+  write_pair(dir / "images", "1000.000000.jpg", "");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "images", options), "1000.000000.jpg",
+                     "have the same name stem");
+}
+
+// gslam reconstruct on a folder of images; gslam eval of a live --watch run on the same folder.
+TEST(CliImages, ReconstructsAFolderOfImagesAndEvaluatesAWatchedRun) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 4;
+  app::write_synthetic_sequence(dir / "seq", o);
+  std::filesystem::remove(dir / "seq" / "rgb.txt");
+  std::filesystem::remove(dir / "seq" / "depth.txt");
+  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
+  const auto r = run_gslam("reconstruct " + (dir / "seq").string() + " --out " + (dir / "run").string() +
+                           " --config " + (dir / "quick.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(images)"), std::string::npos) << r.output;
+
+  std::ofstream(dir / "seq" / "END") << "\n";
+  const auto live = run_gslam("live " + (dir / "seq").string() + " --watch --headless --out " +
+                              (dir / "live").string() + " --config " + (dir / "quick.json").string());
+  ASSERT_EQ(live.exit_code, 0) << live.output;
+  const auto eval = run_gslam("eval " + (dir / "live").string());
+  EXPECT_EQ(eval.exit_code, 0) << eval.output;
 }
 
 }  // namespace

@@ -25,7 +25,8 @@ int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
   int n = 0;
   for (int y = 0; y < image.height; ++y) {
     for (int x = 0; x < image.width; ++x) {
-      n += image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
+      n +=
+          image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
     }
   }
   return n;
@@ -35,7 +36,8 @@ int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
 int count_map_pixels(const splat::Image8& image) {
   int n = 0;
   for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
+    for (int x = 0; x < image.width; ++x)
+      n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
   }
   return n;
 }
@@ -58,21 +60,24 @@ Fixture make_fixture() {
   const splat::Camera& c = f.random.camera;
   const app::Intrinsics k{c.fx, c.fy, c.cx, c.cy, c.width, c.height};
   const std::vector<Eigen::Isometry3d> cameras{T0, T1, T2};
-  f.scene = app::make_map_scene(f.random.gaussians, cameras, {0.0, 0.1, 0.2}, k, app::camera_up(cameras));
+  f.scene =
+      app::make_map_scene(f.random.gaussians, cameras, {0.0, 0.1, 0.2}, k, app::camera_up(cameras));
   return f;
 }
 
 TEST(MapView, OverviewShowsMapCamerasAndTrajectory) {
   const Fixture f = make_fixture();
   auto rasterizer = splat::make_cpu_rasterizer({1});
-  const splat::Image8 picture = app::compose_map_view(f.scene, app::overview_view(f.scene), *rasterizer);
+  const splat::Image8 picture =
+      app::compose_map_view(f.scene, app::overview_view(f.scene), *rasterizer);
   ASSERT_EQ(picture.width, app::kMapViewWidth);
   ASSERT_EQ(picture.height, app::kMapViewHeight);
   EXPECT_GT(count_map_pixels(picture), 5000) << "the map should fill part of the picture";
   EXPECT_GT(count_colour(picture, app::kCameraMarkerRgb), 60) << "camera frusta not drawn";
   EXPECT_GT(count_colour(picture, app::kTrajectoryRgb), 10) << "trajectory not drawn";
   // At half resolution the picture has the same size and still shows the map.
-  const splat::Image8 quick = app::compose_map_view(f.scene, app::overview_view(f.scene), *rasterizer, 2);
+  const splat::Image8 quick =
+      app::compose_map_view(f.scene, app::overview_view(f.scene), *rasterizer, 2);
   ASSERT_EQ(quick.width, app::kMapViewWidth);
   EXPECT_GT(count_map_pixels(quick), 5000) << "half-resolution picture";
 }
@@ -83,7 +88,8 @@ TEST(MapView, JumpingToACameraRendersFromItsPoseWithItsIntrinsics) {
   for (int i = 0; i < 3; ++i) {
     const app::MapViewCamera view = app::recorded_view(f.scene, i);
     EXPECT_EQ(view.camera, i);
-    EXPECT_TRUE(view.T_world_view.isApprox(f.scene.cameras[static_cast<std::size_t>(i)], 1e-12)) << "camera " << i;
+    EXPECT_TRUE(view.T_world_view.isApprox(f.scene.cameras[static_cast<std::size_t>(i)], 1e-12))
+        << "camera " << i;
     // The 64x48 camera scaled 12.5 times fills the 800x600 picture exactly.
     splat::Camera expected = f.random.camera;
     for (double* v : {&expected.fx, &expected.fy, &expected.cx, &expected.cy}) *v *= 12.5;
@@ -103,14 +109,17 @@ TEST(MapView, JumpingToACameraRendersFromItsPoseWithItsIntrinsics) {
       for (int x = 0; x < picture.width; ++x) {
         bool equal = true;
         for (int c = 0; c < 3; ++c) {
-          const float v = direct.rgb[(static_cast<std::size_t>(y) * picture.width + x) * 3 + static_cast<std::size_t>(c)];
-          equal = equal && picture.at(x, y, c) == static_cast<uint8_t>(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f);
+          const float v = direct.rgb[(static_cast<std::size_t>(y) * picture.width + x) * 3 +
+                                     static_cast<std::size_t>(c)];
+          equal = equal && picture.at(x, y, c) ==
+                               static_cast<uint8_t>(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f);
         }
         same += equal;
       }
     }
     // Everything but the other cameras' frusta and the trajectory drawn over the render.
-    EXPECT_GT(static_cast<double>(same) / static_cast<double>(picture.pixels()), 0.95) << "camera " << i;
+    EXPECT_GT(static_cast<double>(same) / static_cast<double>(picture.pixels()), 0.95)
+        << "camera " << i;
     EXPECT_GT(count_map_pixels(picture), 20000) << "camera " << i;
   }
   GSLAM_EXPECT_ERROR(app::recorded_view(f.scene, 3), "camera 3 is not recorded", "expected 0 to 2");
@@ -121,12 +130,15 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
   const Fixture f = make_fixture();
   const app::MapViewCamera start = app::recorded_view(f.scene, 0);
   const Eigen::Vector3d eye = start.T_world_view.translation();
-  const Eigen::Vector3d x = start.T_world_view.linear().col(0), y = start.T_world_view.linear().col(1),
+  const Eigen::Vector3d x = start.T_world_view.linear().col(0),
+                        y = start.T_world_view.linear().col(1),
                         z = start.T_world_view.linear().col(2);
   const Eigen::Vector3d& up = f.scene.up;
   const double d0 = (start.pivot - eye).norm();
   ASSERT_GT(d0, 0);
-  auto moved = [&](const app::MapViewCamera& v) { return Eigen::Vector3d(v.T_world_view.translation() - eye); };
+  auto moved = [&](const app::MapViewCamera& v) {
+    return Eigen::Vector3d(v.T_world_view.translation() - eye);
+  };
 
   {  // Dragging right pans the scene right: the view moves to its left, the pivot with it.
     app::MapViewCamera v = start;
@@ -151,7 +163,8 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
     v = start;
     app::fly_view(v, f.scene, Eigen::Vector3d(0, -0.3, 0));
     EXPECT_TRUE(moved(v).isApprox(-0.3 * up, 1e-9)) << moved(v).transpose();
-    EXPECT_TRUE(v.T_world_view.linear().isApprox(start.T_world_view.linear(), 1e-12)) << "fly does not turn";
+    EXPECT_TRUE(v.T_world_view.linear().isApprox(start.T_world_view.linear(), 1e-12))
+        << "fly does not turn";
     EXPECT_EQ(v.camera, -1);
   }
   {  // Zoom: 10% of the distance to the pivot a step, along the axis; the pivot stays.
@@ -168,7 +181,8 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
     app::orbit_view(v, f.scene, 30, 0);
     const Eigen::Vector3d offset = v.T_world_view.translation() - v.pivot;
     EXPECT_NEAR(offset.norm(), d0, 1e-9);
-    EXPECT_TRUE(v.T_world_view.linear().col(2).isApprox(-offset.normalized(), 1e-9)) << "looks at the pivot";
+    EXPECT_TRUE(v.T_world_view.linear().col(2).isApprox(-offset.normalized(), 1e-9))
+        << "looks at the pivot";
     EXPECT_LT(moved(v).dot(x), -1e-3) << "dragging right turns the scene right: the view goes left";
     EXPECT_NEAR((v.T_world_view.translation() - v.pivot).dot(up), (eye - start.pivot).dot(up), 1e-9)
         << "a sideways drag keeps the height";
@@ -177,7 +191,8 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
     EXPECT_GT((w.T_world_view.translation() - w.pivot).dot(up), (eye - start.pivot).dot(up) + 1e-3)
         << "dragging down raises the view";
     app::orbit_view(w, f.scene, 0, 1e5);
-    EXPECT_LE((w.T_world_view.translation() - w.pivot).normalized().dot(up), std::sin(85.0 * M_PI / 180.0) + 1e-9)
+    EXPECT_LE((w.T_world_view.translation() - w.pivot).normalized().dot(up),
+              std::sin(85.0 * M_PI / 180.0) + 1e-9)
         << "elevation stops short of the pole";
   }
   {  // The overview looks at the map's centre from outside the cameras.
@@ -185,7 +200,8 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
     EXPECT_TRUE(v.pivot.isApprox(f.scene.extent.center, 1e-12));
     EXPECT_EQ(v.camera, -1);
     for (const auto& T : f.scene.cameras) {
-      EXPECT_GT((v.T_world_view.translation() - v.pivot).norm(), (T.translation() - v.pivot).norm());
+      EXPECT_GT((v.T_world_view.translation() - v.pivot).norm(),
+                (T.translation() - v.pivot).norm());
     }
   }
 }
@@ -193,12 +209,15 @@ TEST(MapView, OrbitPanZoomAndFlyMoveTheViewTheExpectedWay) {
 TEST(MapView, SceneChecksItsInputs) {
   gslam::test::SceneOptions o;
   const auto random = gslam::test::make_random_scene<float>(o);
-  GSLAM_EXPECT_ERROR(app::make_map_scene({}, {}, {}, std::nullopt, Eigen::Vector3d::UnitZ()), "no Gaussians");
-  GSLAM_EXPECT_ERROR(app::make_map_scene(random.gaussians, {}, {}, std::nullopt, Eigen::Vector3d::Zero()), "up");
-  GSLAM_EXPECT_ERROR(app::make_map_scene(random.gaussians, {Eigen::Isometry3d::Identity()}, {0.0, 1.0}, std::nullopt,
-                                         Eigen::Vector3d::UnitZ()),
+  GSLAM_EXPECT_ERROR(app::make_map_scene({}, {}, {}, std::nullopt, Eigen::Vector3d::UnitZ()),
+                     "no Gaussians");
+  GSLAM_EXPECT_ERROR(
+      app::make_map_scene(random.gaussians, {}, {}, std::nullopt, Eigen::Vector3d::Zero()), "up");
+  GSLAM_EXPECT_ERROR(app::make_map_scene(random.gaussians, {Eigen::Isometry3d::Identity()},
+                                         {0.0, 1.0}, std::nullopt, Eigen::Vector3d::UnitZ()),
                      "2 timestamps for 1 cameras");
-  const app::MapScene bare = app::make_map_scene(random.gaussians, {}, {}, std::nullopt, Eigen::Vector3d(0, 0, 2));
+  const app::MapScene bare =
+      app::make_map_scene(random.gaussians, {}, {}, std::nullopt, Eigen::Vector3d(0, 0, 2));
   EXPECT_TRUE(bare.up.isApprox(Eigen::Vector3d::UnitZ()));
   GSLAM_EXPECT_ERROR(app::recorded_view(bare, 0), "the map has no cameras");
 }
@@ -212,8 +231,8 @@ class CliView : public ::testing::Test {
     o.frames = 8;
     app::write_synthetic_sequence(*dir_ / "seq", o);
     std::ofstream(*dir_ / "config.json") << R"({"refine_passes": 0})";
-    const auto r = run_gslam("reconstruct " + (*dir_ / "seq").string() + " --out " + run().string() + " --config " +
-                             (*dir_ / "config.json").string());
+    const auto r = run_gslam("reconstruct " + (*dir_ / "seq").string() + " --out " +
+                             run().string() + " --config " + (*dir_ / "config.json").string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   static void TearDownTestSuite() { dir_.reset(); }
@@ -225,9 +244,10 @@ class CliView : public ::testing::Test {
     const std::filesystem::path shot = *dir_ / name;
     // Leak checking off for this process only, as in CliLive: Mesa's GLX driver leaves 112
     // bytes LeakSanitizer cannot attribute once glfwTerminate unloads it.
-    const auto r = gslam::test::run_command("ASAN_OPTIONS=detect_leaks=0 xvfb-run -a -s '-screen 0 1280x1024x24' " +
-                                            std::string(GSLAM_BINARY) + " view " + args + " --backend cpu --screenshot " +
-                                            shot.string());
+    const auto r = gslam::test::run_command(
+        "ASAN_OPTIONS=detect_leaks=0 xvfb-run -a -s '-screen 0 1280x1024x24' " +
+        std::string(GSLAM_BINARY) + " view " + args + " --backend cpu --screenshot " +
+        shot.string());
     EXPECT_EQ(r.exit_code, 0) << r.output;
     if (r.exit_code != 0 || !std::filesystem::exists(shot)) return {};
     return app::read_png_rgb8(shot);
@@ -236,7 +256,8 @@ class CliView : public ::testing::Test {
 std::unique_ptr<TempDir> CliView::dir_;
 
 TEST_F(CliView, ScreenshotOfARunFolderShowsTheMapAndItsCameras) {
-  if (!gslam::test::program_available("xvfb-run")) GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
+  if (!gslam::test::program_available("xvfb-run"))
+    GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
   const splat::Image8 overview = screenshot(run().string(), "overview.png");
   ASSERT_EQ(overview.width, app::kMapViewWidth);
   ASSERT_EQ(overview.height, app::kMapViewHeight);
@@ -249,12 +270,15 @@ TEST_F(CliView, ScreenshotOfARunFolderShowsTheMapAndItsCameras) {
 }
 
 TEST_F(CliView, ScreenshotOfABareMapShowsIt) {
-  if (!gslam::test::program_available("xvfb-run")) GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
-  for (const std::string& map : {std::string(GSLAM_SOURCE_DIR) + "/assets/demo_map.ply", (run() / "map.glb").string()}) {
+  if (!gslam::test::program_available("xvfb-run"))
+    GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
+  for (const std::string& map :
+       {std::string(GSLAM_SOURCE_DIR) + "/assets/demo_map.ply", (run() / "map.glb").string()}) {
     const splat::Image8 picture = screenshot(map, "bare.png");
     ASSERT_EQ(picture.width, app::kMapViewWidth) << map;
     EXPECT_GT(count_map_pixels(picture), 10000) << map;
-    EXPECT_EQ(count_colour(picture, app::kCameraMarkerRgb), 0) << map << ": a bare map has no cameras";
+    EXPECT_EQ(count_colour(picture, app::kCameraMarkerRgb), 0)
+        << map << ": a bare map has no cameras";
   }
 }
 
@@ -265,19 +289,21 @@ TEST_F(CliView, ErrorsAreOneLineNamingTheCause) {
   EXPECT_EQ(r.output, "error: " + missing + ": no such file or folder\n");
   const auto empty_folder = run_gslam("view " + (*dir_ / "seq").string());
   EXPECT_NE(empty_folder.exit_code, 0);
-  EXPECT_NE(empty_folder.output.find("error: " + (*dir_ / "seq" / "map.ply").string() + ": no such file"),
-            std::string::npos)
+  EXPECT_NE(
+      empty_folder.output.find("error: " + (*dir_ / "seq" / "map.ply").string() + ": no such file"),
+      std::string::npos)
       << empty_folder.output;
   const auto camera = run_gslam("view " + run().string() + " --camera 99");
   EXPECT_NE(camera.exit_code, 0);
-  EXPECT_NE(camera.output.find("error: view: camera 99 is not recorded, expected 0 to 7"), std::string::npos)
+  EXPECT_NE(camera.output.find("error: view: camera 99 is not recorded, expected 0 to 7"),
+            std::string::npos)
       << camera.output;
   const auto up = run_gslam("view " + run().string() + " --up 0,0");
   EXPECT_NE(up.exit_code, 0);
   EXPECT_NE(up.output.find("--up"), std::string::npos) << up.output;
   // No display (DISPLAY and WAYLAND_DISPLAY unset): the window's error is the only line.
-  const auto headless = gslam::test::run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(GSLAM_BINARY) +
-                                                 " view " + run().string());
+  const auto headless = gslam::test::run_command(
+      "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(GSLAM_BINARY) + " view " + run().string());
   EXPECT_NE(headless.exit_code, 0);
   EXPECT_EQ(headless.output.rfind("error: viewer: ", 0), 0u) << headless.output;
   EXPECT_EQ(std::count(headless.output.begin(), headless.output.end(), '\n'), 1) << headless.output;
