@@ -162,7 +162,7 @@ int run_eval(const EvalOptions& o) {
   const char* axis_names[3] = {"x", "y", "z"};
   top.labels(std::string(axis_names[a]) + " (m)", std::string(axis_names[b]) + " (m)");
   top.title("top view, estimate aligned to ground truth");
-  top.add(gx, gy, {150, 150, 150}, "ground truth");
+  top.add(gx, gy, {40, 40, 40}, "ground truth");
   std::vector<double> error_cm;
   for (double e : errors.ate_errors) error_cm.push_back(100 * e);
   top.add_coloured(ex, ey, error_cm, "estimate, error (cm)");
