@@ -231,15 +231,6 @@ ImageFolder list_image_folder(const std::filesystem::path& root) {
   return out;
 }
 
-// The stem as a number ("1341841873.273798", "-2", "1e3"), if all of it is one and finite.
-std::optional<double> stem_number(const std::string& stem) {
-  double value = 0;
-  const char* end = stem.data() + stem.size();
-  const auto [ptr, ec] = std::from_chars(stem.data(), end, value);
-  if (ec != std::errc() || ptr != end || !std::isfinite(value)) return std::nullopt;
-  return value;
-}
-
 // A folder of images as a camera driver writes it for `live --watch`: rgb/NAME.png|jpg and
 // depth/NAME.png paired by identical stem NAME, intrinsics.txt "fx fy cx cy" (or --intrinsics),
 // optional groundtruth.txt. When every frame's stem is a number it is the timestamp in seconds
@@ -464,6 +455,14 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   }
   set_size_from(d.intrinsics, d.entries.front().rgb);
   return d;
+}
+
+std::optional<double> stem_number(const std::string& stem) {
+  double value = 0;
+  const char* end = stem.data() + stem.size();
+  const auto [ptr, ec] = std::from_chars(stem.data(), end, value);
+  if (ec != std::errc() || ptr != end || !std::isfinite(value)) return std::nullopt;
+  return value;
 }
 
 }  // namespace app

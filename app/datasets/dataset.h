@@ -65,6 +65,11 @@ splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::p
 // Replica as used by NICE-SLAM/SplaTAM (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5,
 // traj.txt). An unknown camera without --intrinsics is an error, never a guess. A folder that
 // matches no layout is an error naming every layout and what the folder lacks.
+// An image file's stem as its timestamp in seconds ("1341841873.273798", "-2", "1e3"), if all
+// of it is one finite number. The images layout and `live --watch` stamp frames alike: by this,
+// else at 30 Hz by index.
+std::optional<double> stem_number(const std::string& stem);
+
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options = {});
 
 // TUM's association: each colour frame paired with the nearest unused depth frame within

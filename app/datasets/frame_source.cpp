@@ -227,9 +227,7 @@ class WatchSource final : public ThreadedSource {
         last_ = name;
         ++taken_;
         DatasetEntry entry;
-        char* end = nullptr;
-        entry.timestamp = std::strtod(name.c_str(), &end);
-        if (end == name.c_str()) entry.timestamp = static_cast<double>(taken_);
+        entry.timestamp = stem_number(name).value_or(static_cast<double>(taken_ - 1) / 30.0);
         entry.rgb = dir_ / "rgb" / (name + ".png");
         entry.depth = dir_ / "depth" / (name + ".png");
         if (dataset_.entries.empty()) {

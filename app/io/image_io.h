@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <span>
@@ -9,6 +10,13 @@
 #include "splat/image.h"
 
 namespace app {
+
+// Readers check an image's header before allocating its pixels: 16384 a side and 64 Mpixels
+// (192 MiB as 8-bit RGB) at most.
+inline constexpr char kImageSizeLimit[] = "16384 a side and 67108864 pixels";
+inline bool image_size_allowed(std::uint64_t width, std::uint64_t height) {
+  return width <= 16384 && height <= 16384 && width * height <= (std::uint64_t(1) << 26);
+}
 
 // Writes [H, W, 3] colour as 8-bit RGB PNG: clamped to [0, 1], rounded, no colour-space change
 // (3DGS colours are display values already). Atomic. Throws splat::Error on failure.

@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <cctype>
 #include <csetjmp>
 #include <cstdio>
 #include <memory>
@@ -44,6 +46,11 @@ splat::Image8 read_jpeg_rgb8(const std::filesystem::path& path) {
   jpeg_create_decompress(&info);
   jpeg_stdio_src(&info, file.get());
   jpeg_read_header(&info, TRUE);
+  if (!image_size_allowed(info.image_width, info.image_height)) {
+    const std::string size = std::to_string(info.image_width) + "x" + std::to_string(info.image_height);
+    jpeg_destroy_decompress(&info);
+    throw splat::Error(path.string() + ": header says " + size + ", expected at most " + kImageSizeLimit);
+  }
   info.out_color_space = JCS_RGB;
   jpeg_start_decompress(&info);
   image = splat::Image8(static_cast<int>(info.output_width), static_cast<int>(info.output_height), 3);
@@ -88,8 +95,9 @@ void write_jpeg_rgb8(const std::filesystem::path& path, const splat::Image8& ima
 }
 
 splat::Image8 read_rgb8(const std::filesystem::path& path) {
-  const std::string ext = path.extension().string();
-  if (ext == ".jpg" || ext == ".jpeg" || ext == ".JPG") return read_jpeg_rgb8(path);
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".jpg" || ext == ".jpeg") return read_jpeg_rgb8(path);
   return read_png_rgb8(path);
 }
 

@@ -93,11 +93,11 @@ splat::ImageT<T> read_png(const std::filesystem::path& path, int channels,
     fail(path, problem);
   }
   const png_uint_32 png_width = png_get_image_width(png, info), png_height = png_get_image_height(png, info);
-  // The header is checked before the pixels are allocated: 16384 a side and 64 Mpixels at most.
-  if (png_width > 16384 || png_height > 16384 || uint64_t(png_width) * png_height > (uint64_t(1) << 26)) {
+  // The header is checked before the pixels are allocated.
+  if (!image_size_allowed(png_width, png_height)) {
     png_destroy_read_struct(&png, &info, nullptr);
-    fail(path, "header says " + std::to_string(png_width) + "x" + std::to_string(png_height) +
-                   ", expected at most 16384 a side and 67108864 pixels");
+    fail(path, "header says " + std::to_string(png_width) + "x" + std::to_string(png_height) + ", expected at most " +
+                   kImageSizeLimit);
   }
   const int width = static_cast<int>(png_width), height = static_cast<int>(png_height);
   image = splat::ImageT<T>(width, height, channels);

@@ -394,6 +394,7 @@ TEST(CliImages, ReconstructsAFolderOfImagesAndEvaluatesAWatchedRun) {
   ASSERT_EQ(live.exit_code, 0) << live.output;
   const auto eval = run_gslam("eval " + (dir / "live").string());
   EXPECT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("ATE RMSE"), std::string::npos) << eval.output;
 }
 
 }  // namespace

@@ -89,4 +89,19 @@ TEST(ImageFormats, PngHeaderClaimingGigapixelsIsRefusedBeforeAllocating) {
   GSLAM_EXPECT_ERROR(app::read_png_rgb8(dir / "huge.png"), "huge.png", "100000x100000", "at most 16384 a side");
 }
 
+// A JPEG whose frame header claims 60000x60000 pixels: refused from the header as well, and
+// found by its extension in any case.
+TEST(ImageFormats, JpegHeaderClaimingGigapixelsIsRefusedBeforeAllocating) {
+  TempDir dir;
+  app::write_jpeg_rgb8(dir / "small.jpg", splat::Image8(8, 8, 3, 100), 90);
+  std::string jpeg = gslam::test::read_text(dir / "small.jpg");
+  const std::size_t sof = jpeg.find(std::string("\xff\xc0", 2));  // baseline frame header
+  ASSERT_NE(sof, std::string::npos);
+  // Marker, length (2), precision (1), then height and width, big-endian.
+  for (std::size_t k : {sof + 5, sof + 7}) jpeg[k] = char(0xea), jpeg[k + 1] = char(0x60);
+  gslam::test::write_text(dir / "huge.JPEG", jpeg);
+  GSLAM_EXPECT_ERROR(app::read_rgb8(dir / "huge.JPEG"), "huge.JPEG", "60000x60000", "at most 16384 a side");
+  EXPECT_EQ(app::read_rgb8(dir / "small.jpg").width, 8);
+}
+
 }  // namespace

@@ -12,11 +12,18 @@
 #include "io/trajectory.h"
 #include "splat/vulkan_rasterizer.h"
 #include "support/random_scene.h"
+#include "support/image_counts.h"
 #include "support/temp_dir.h"
 
 namespace {
 
 using gslam::test::TempDir;
+
+// The map panel's pixels of a colour, and its splats.
+int count_colour_in_panel(const splat::Image8& image, const uint8_t rgb[3]) {
+  return gslam::test::count_colour(image, rgb, app::kMapPanelWidth);
+}
+int count_map_pixels_in_panel(const splat::Image8& image) { return gslam::test::count_map_pixels(image, app::kMapPanelWidth); }
 
 std::filesystem::path synthetic(const TempDir& dir, int frames) {
   app::SyntheticOptions o;
@@ -28,28 +35,6 @@ std::filesystem::path synthetic(const TempDir& dir, int frames) {
 nlohmann::json read_json(const std::filesystem::path& path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in);
-}
-
-// Pixels of the map panel with exactly this colour.
-int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
-  int n = 0;
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < app::kMapPanelWidth && x < image.width; ++x) {
-      n +=
-          image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
-    }
-  }
-  return n;
-}
-
-// Map panel pixels that differ from the empty panel's dark background (the splats).
-int count_map_pixels(const splat::Image8& image) {
-  int n = 0;
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < app::kMapPanelWidth; ++x)
-      n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
-  }
-  return n;
 }
 
 TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
@@ -69,13 +54,13 @@ TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
   const splat::Image8 picture = app::compose_live_view(state, {}, *rasterizer);
   ASSERT_EQ(picture.width, app::kLiveViewWidth);
   ASSERT_EQ(picture.height, app::kLiveViewHeight);
-  EXPECT_GT(count_map_pixels(picture), 5000) << "the map should fill part of the panel";
-  EXPECT_GT(count_colour(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
-  EXPECT_GT(count_colour(picture, app::kCameraRgb), 20) << "current camera not drawn";
+  EXPECT_GT(count_map_pixels_in_panel(picture), 5000) << "the map should fill part of the panel";
+  EXPECT_GT(count_colour_in_panel(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
+  EXPECT_GT(count_colour_in_panel(picture, app::kCameraRgb), 20) << "current camera not drawn";
   EXPECT_EQ(picture.at(app::kMapPanelWidth + 10, 10, 0), 200) << "input frame not shown";
   app::ViewCamera orbit;
   orbit.follow = false;
-  EXPECT_GT(count_map_pixels(app::compose_live_view(state, orbit, *rasterizer)), 1000)
+  EXPECT_GT(count_map_pixels_in_panel(app::compose_live_view(state, orbit, *rasterizer)), 1000)
       << "orbit view";
 }
 
@@ -183,9 +168,9 @@ TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
   ASSERT_TRUE(std::filesystem::exists(shot)) << r.output;
   const splat::Image8 picture = app::read_png_rgb8(shot);
   ASSERT_EQ(picture.width, app::kLiveViewWidth);
-  EXPECT_GT(count_map_pixels(picture), 20000) << "map not drawn";
-  EXPECT_GT(count_colour(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
-  EXPECT_GT(count_colour(picture, app::kCameraRgb), 20) << "camera not drawn";
+  EXPECT_GT(count_map_pixels_in_panel(picture), 20000) << "map not drawn";
+  EXPECT_GT(count_colour_in_panel(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
+  EXPECT_GT(count_colour_in_panel(picture, app::kCameraRgb), 20) << "camera not drawn";
   EXPECT_TRUE(std::filesystem::exists(dir / "run" / "summary.json"));
 }
 

@@ -12,35 +12,16 @@
 #include "splat/error.h"
 #include "support/expect_error.h"
 #include "support/random_scene.h"
+#include "support/image_counts.h"
 #include "support/temp_dir.h"
 #include "viewer/live_view.h"
 #include "viewer/map_view.h"
 
 namespace {
 
+using gslam::test::count_colour;
+using gslam::test::count_map_pixels;
 using gslam::test::TempDir;
-
-// Pixels with exactly this colour.
-int count_colour(const splat::Image8& image, const uint8_t rgb[3]) {
-  int n = 0;
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      n +=
-          image.at(x, y, 0) == rgb[0] && image.at(x, y, 1) == rgb[1] && image.at(x, y, 2) == rgb[2];
-    }
-  }
-  return n;
-}
-
-// Pixels brighter than the dark background (24, or 0.1 * 255 where the map is rendered).
-int count_map_pixels(const splat::Image8& image) {
-  int n = 0;
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x)
-      n += image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2) > 120;
-  }
-  return n;
-}
 
 // A random map, seen by three recorded cameras: the scene's own, one 0.3 m to its left and
 // one 0.5 m behind that.
