@@ -228,13 +228,14 @@ TEST(CliLive, RunFolderTakesEvalAndRender) {
 }
 
 // Mapping that falls behind skips keyframes while the stream runs; at its end they are mapped
-// (catch-up) before the outputs are written, unless --no-catch-up. With 150 mapping steps a
-// keyframe and a keyframe every second frame, mapping takes far longer per keyframe than
-// tracking takes per frame, so keyframes are skipped on any machine.
+// (catch-up) before the outputs are written, unless --no-catch-up. With 40 mapping steps a
+// keyframe (each a render and its gradient) and a keyframe every second frame, mapping takes
+// some 50 times longer per keyframe than tracking per frame, so keyframes are skipped on any
+// machine, loaded or not.
 TEST(CliLive, CatchUpMapsTheKeyframesMappingSkipped) {
   TempDir dir;
-  const auto seq = synthetic(dir, 20);
-  std::ofstream(dir / "heavy.json") << R"({"keyframe_every": 2, "mapping": {"iterations": 150}})";
+  const auto seq = synthetic(dir, 12);
+  std::ofstream(dir / "heavy.json") << R"({"keyframe_every": 2, "mapping": {"iterations": 40}})";
   const std::string args = " --headless --every-frame --config " + (dir / "heavy.json").string();
   const auto caught_up = run_gslam("live " + seq.string() + " --out " + (dir / "caught_up").string() + args);
   ASSERT_EQ(caught_up.exit_code, 0) << caught_up.output;
