@@ -4,7 +4,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libglm-dev libpng-dev libjpeg-dev libopenexr-dev libtinygltf-dev nlohmann-json3-dev
-  libcli11-dev libgtest-dev libbenchmark-dev libstb-dev libopencv-dev libceres-dev
+  libcli11-dev libgtest-dev libbenchmark-dev libstb-dev libopencv-dev libopencv-contrib-dev libceres-dev
   libvulkan-dev glslang-tools mesa-vulkan-drivers
   libglfw3-dev libgl-dev libgl1-mesa-dri xvfb xauth
   clang libclang-rt-14-dev

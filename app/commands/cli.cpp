@@ -7,6 +7,7 @@
 
 #include "splat/error.h"
 
+#include "commands/benchmark_command.h"
 #include "commands/eval_command.h"
 #include "commands/live_command.h"
 #include "commands/nearest_name.h"
@@ -30,6 +31,20 @@ const CLI::Validator kPositiveFinite(
       return {};
     },
     "POSITIVE");
+
+// --test-every: 0 (none) or an integer >= 2.
+const CLI::Validator kTestEvery(
+    [](const std::string& text) -> std::string {
+      const std::string expected = "expected 0 (none) or an integer >= 2, got '" + text + "'";
+      std::size_t used = 0;
+      try {
+        const long v = std::stol(text, &used);
+        return used == text.size() && (v == 0 || (v >= 2 && v <= 1000000)) ? std::string() : expected;
+      } catch (const std::exception&) {
+        return expected;
+      }
+    },
+    "N");
 
 void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--backend", choice.backend, "Rasterizer: auto, cpu or vulkan")
@@ -122,18 +137,7 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
   recon_cmd->add_option("--test-every", recon.test_every,
                         "Hold out every N-th frame as a test view: tracked, never mapped (gslam eval scores them apart)")
-      ->check(CLI::Validator(
-          [](const std::string& text) -> std::string {
-            const std::string expected = "expected 0 (none) or an integer >= 2, got '" + text + "'";
-            std::size_t used = 0;
-            try {
-              const long v = std::stol(text, &used);
-              return used == text.size() && (v == 0 || (v >= 2 && v <= 1000000)) ? std::string() : expected;
-            } catch (const std::exception&) {
-              return expected;
-            }
-          },
-          "N"));
+      ->check(kTestEvery);
   add_backend_options(*recon_cmd, recon.backend);
 
   EvalOptions eval;
@@ -181,6 +185,21 @@ int run_cli(int argc, char** argv) {
       ->delimiter(',')->expected(3)->check(CLI::Number);
   add_backend_options(*view_cmd, view.backend);
 
+  BenchmarkOptions bench;
+  CLI::App* bench_cmd = cli.add_subcommand(
+      "benchmark", "Reconstruct and evaluate every sequence under a folder with the same settings; print their table");
+  bench_cmd->add_option("folder", bench.root, "Folder of sequences (TUM, plain, Replica or images layouts, at any depth)")
+      ->required();
+  bench_cmd->add_option("--out", bench.out, "Output folder: a run folder per sequence, logs/, benchmark.md and .json")
+      ->required();
+  bench_cmd->add_option("--config", bench.config, "JSON file with SLAM settings, the same for every sequence");
+  bench_cmd->add_option("--test-every", bench.test_every, "Hold out every N-th frame as a test view (reconstruct --test-every)")
+      ->check(kTestEvery);
+  bench_cmd->add_option("--max-frames", bench.max_frames, "Use only the first N frames of each sequence")
+      ->check(CLI::NonNegativeNumber);
+  bench_cmd->add_flag("--no-baseline{false}", bench.baseline, "Leave out the OpenCV RGB-D odometry baseline");
+  add_backend_options(*bench_cmd, bench.backend);
+
   // A mistyped command: CLI11 would only say that one is required.
   std::vector<std::string> commands;
   for (const CLI::App* sub : cli.get_subcommands({})) commands.push_back(sub->get_name());
@@ -207,6 +226,7 @@ int run_cli(int argc, char** argv) {
   }
   if (eval_cmd->parsed()) return run_eval(eval);
   if (view_cmd->parsed()) return run_view(view);
+  if (bench_cmd->parsed()) return run_benchmark(bench);
   if (live_cmd->parsed()) {
     if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
     if (!live.dataset_options.intrinsics.empty()) live.watch_options.intrinsics = live.dataset_options.intrinsics;

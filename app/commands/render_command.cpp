@@ -12,6 +12,7 @@
 #include "io/image_io.h"
 #include "io/video_io.h"
 #include "io/map_io.h"
+#include "commands/map_up.h"
 #include "commands/progress.h"
 #include "commands/run_input.h"
 #include "io/trajectory.h"
@@ -92,38 +93,12 @@ struct Views {
   std::string description;
 };
 
-// An orbit's up: --up, else the world_up of the summary.json beside the map (a run's map.ply or
-// map.glb, both in the run's world frame), else estimated from the poses there are
-// (estimate_world_up), else +z; and where it came from.
-struct OrbitUp {
-  Eigen::Vector3d up;
-  std::string source;
-};
-OrbitUp orbit_up(const RenderOptions& o, const Scene& scene, const splat::Gaussians& map) {
-  if (o.up) return {parse_vector3(*o.up, "up"), "--up"};
-  std::ifstream in(scene.map.parent_path() / "summary.json");
-  const nlohmann::json summary = in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
-  if (summary.is_object() && summary.contains("world_up")) {
-    const nlohmann::json& u = summary["world_up"];
-    try {
-      const Eigen::Vector3d up(u.at("x").get<double>(), u.at("y").get<double>(), u.at("z").get<double>());
-      if (up.allFinite() && up.norm() > 0) return {up.normalized(), "from summary.json world_up"};
-    } catch (const nlohmann::json::exception&) {  // malformed: estimated below, as for an older run
-    }
-  }
-  if (!scene.poses.empty()) {
-    const WorldUp up = estimate_world_up(scene.poses, map);
-    return {up.up, std::string("estimated from the camera poses: ") + up.source_name()};
-  }
-  return {Eigen::Vector3d::UnitZ(), "default; --up x,y,z sets it"};
-}
-
 Views views_of(const RenderOptions& o, const Scene& scene, const splat::Gaussians& map) {
   Views v;
   if (o.orbit || scene.poses.empty()) {
     const int n = o.orbit.value_or(36);
     v.description = "orbit: " + std::to_string(n) + " views about the map";
-    const OrbitUp up = orbit_up(o, scene, map);
+    const MapUp up = choose_map_up(o.up ? std::optional(parse_vector3(*o.up, "up")) : std::nullopt, scene.map, scene.poses, map);
     if (!scene.poses.empty() && !o.up) {
       v.cameras = orbit_at_camera_height(map_extent(map), scene.poses, n, *scene.camera, up.up);
       v.description += " at the cameras' height";

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "commands/map_up.h"
 #include "commands/run_input.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
@@ -60,21 +61,16 @@ LoadedScene load_scene(const ViewOptions& o) {
   }
   LoadedMap map = load_map(map_path);
   for (const auto& notice : map.notices) std::fprintf(stderr, "notice: %s\n", notice.c_str());
-  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  std::string up_source = "default; --up x,y,z sets it";
+  std::optional<Eigen::Vector3d> given;
   if (!o.up.empty()) {
     if (o.up.size() != 3)
       throw splat::Error("--up: expected x,y,z, got " + std::to_string(o.up.size()) + " numbers");
-    up = Eigen::Vector3d(o.up[0], o.up[1], o.up[2]);
-    up_source = "--up";
-  } else if (!cameras.empty()) {
-    const WorldUp world_up = estimate_world_up(cameras, map.gaussians);
-    up = world_up.up;
-    up_source = std::string("estimated from the ") + world_up.source_name();
+    given = Eigen::Vector3d(o.up[0], o.up[1], o.up[2]);
   }
+  const MapUp up = choose_map_up(given, map_path, cameras, map.gaussians);
   return {make_map_scene(std::move(map.gaussians), std::move(cameras), std::move(timestamps),
-                         intrinsics, up),
-          up_source};
+                         intrinsics, up.up),
+          up.source};
 }
 
 // The window's title: what is shown and from where.

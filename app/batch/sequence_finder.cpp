@@ -1,0 +1,54 @@
+#include "batch/sequence_finder.h"
+
+#include <algorithm>
+
+#include "splat/error.h"
+
+namespace app {
+namespace {
+
+bool has_images(const std::filesystem::path& dir) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.is_regular_file(ec)) return true;
+  }
+  return false;
+}
+
+// The layouts open_dataset() detects, by the files that mark them.
+bool looks_like_sequence(const std::filesystem::path& dir) {
+  const auto is = [&](const char* name) { return std::filesystem::exists(dir / name); };
+  if (is("rgb.txt") && is("depth.txt")) return true;                                  // TUM, plain folder
+  if (is("traj.txt") && std::filesystem::is_directory(dir / "results")) return true;  // Replica
+  return std::filesystem::is_directory(dir / "rgb") && std::filesystem::is_directory(dir / "depth") &&
+         is("intrinsics.txt") && has_images(dir / "rgb");                             // images
+}
+
+void search(const std::filesystem::path& root, const std::filesystem::path& dir, int depth_left,
+            std::vector<FoundSequence>& found) {
+  if (looks_like_sequence(dir)) {
+    std::string name = std::filesystem::relative(dir, root).generic_string();
+    if (name == ".") name = std::filesystem::absolute(root).lexically_normal().filename().string();  // the root itself
+    if (name.empty()) name = "sequence";
+    std::replace(name.begin(), name.end(), '/', '_');
+    found.push_back({name, dir});
+    return;
+  }
+  if (depth_left == 0) return;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.is_directory(ec) && !e.is_symlink(ec)) search(root, e.path(), depth_left - 1, found);
+  }
+}
+
+}  // namespace
+
+std::vector<FoundSequence> find_sequences(const std::filesystem::path& root, int max_depth) {
+  if (!std::filesystem::is_directory(root)) throw splat::Error(root.string() + ": not a folder");
+  std::vector<FoundSequence> found;
+  search(root, root, max_depth, found);
+  std::sort(found.begin(), found.end(), [](const FoundSequence& a, const FoundSequence& b) { return a.name < b.name; });
+  return found;
+}
+
+}  // namespace app
