@@ -162,8 +162,8 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_flag_callback("--every-frame", [&live] { live.speed = kEveryFrame; },
                               "Replay every frame, each once the previous one is tracked (none dropped, no clock)")
       ->excludes(speed);
-  live_cmd->add_flag("--no-catch-up{false}", live.catch_up,
-                     "At the end, write the outputs at once instead of first mapping the keyframes mapping skipped");
+  live_cmd->add_flag_callback("--no-catch-up", [&live] { live.catch_up = false; },
+                              "At the end, write the outputs at once instead of first mapping the keyframes mapping skipped");
   live_cmd->add_option("--max-frames", live.dataset_options.max_frames,
                        "Replay only the first N frames of the recording (frames dropped among them count); with "
                        "--watch, stop after N frames are tracked");
@@ -197,7 +197,8 @@ int run_cli(int argc, char** argv) {
       ->check(kTestEvery);
   bench_cmd->add_option("--max-frames", bench.max_frames, "Use only the first N frames of each sequence")
       ->check(CLI::NonNegativeNumber);
-  bench_cmd->add_flag("--no-baseline{false}", bench.baseline, "Leave out the OpenCV RGB-D odometry baseline");
+  bench_cmd->add_flag_callback("--no-baseline", [&bench] { bench.baseline = false; },
+                               "Leave out the OpenCV RGB-D odometry baseline");
   add_backend_options(*bench_cmd, bench.backend);
 
   // A mistyped command: CLI11 would only say that one is required.
