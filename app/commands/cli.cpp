@@ -9,6 +9,7 @@
 
 #include "commands/benchmark_command.h"
 #include "commands/eval_command.h"
+#include "commands/generate_command.h"
 #include "commands/live_command.h"
 #include "commands/nearest_name.h"
 #include "commands/reconstruct_command.h"
@@ -201,6 +202,37 @@ int run_cli(int argc, char** argv) {
                                "Leave out the OpenCV RGB-D odometry baseline");
   add_backend_options(*bench_cmd, bench.backend);
 
+  GenerateOptions gen;
+  CLI::App* gen_cmd = cli.add_subcommand(
+      "generate", "Write a synthetic RGB-D sequence with exact ground truth (TUM layout), or the hard-case suite");
+  gen_cmd->add_option("out", gen.out, "Output folder")->required();
+  gen_cmd->add_flag("--suite", gen.suite, "The hard cases every default is checked on, a folder each (for gslam benchmark)");
+  gen_cmd->add_flag("--overwrite", gen.overwrite, "Replace what an earlier generate wrote in the folder");
+  SyntheticOptions& seq = gen.sequence;
+  gen_cmd->add_option("--frames", seq.frames, "Frames")->check(CLI::Range(1, 100000));
+  gen_cmd->add_option("--width", seq.width, "Image width")->check(CLI::Range(8, 8192));
+  gen_cmd->add_option("--height", seq.height, "Image height")->check(CLI::Range(8, 8192));
+  gen_cmd->add_option("--laps", seq.laps, "Laps of a circle back to the start (0: an arc through the room)")
+      ->check(CLI::Range(0, 100));
+  gen_cmd->add_option("--shake", seq.shake_peak_rate, "Yaw shake on top of the path, peak rate in rad/s")
+      ->check(CLI::Range(0.0, 50.0));
+  gen_cmd->add_option("--exposure", seq.exposure, "Motion blur: exposure in seconds (with --blur-samples)")
+      ->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--blur-samples", seq.blur_samples, "Instants averaged over the exposure")->check(CLI::Range(1, 64));
+  gen_cmd->add_option("--depth-noise", seq.depth_noise, "Depth noise in metres at 1 m, growing with depth squared")
+      ->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--depth-holes", seq.depth_holes, "Fraction of pixels without depth, in blobs")
+      ->check(CLI::Range(0.0, 0.99));
+  gen_cmd->add_option("--focal-error", seq.focal_error, "intrinsics.txt's focal length off by this fraction")
+      ->check(CLI::Range(-0.5, 0.5));
+  gen_cmd->add_option("--seed", seq.seed, "Random seed (noise, holes)");
+  gen_cmd->callback([gen_cmd, &gen] {
+    for (const char* flag : {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
+                             "--depth-noise", "--depth-holes", "--focal-error", "--seed"}) {
+      if (gen.suite && gen_cmd->count(flag) > 0) throw CLI::ValidationError(std::string(flag) + " describes one sequence; --suite writes its own");
+    }
+  });
+
   // A mistyped command: CLI11 would only say that one is required.
   std::vector<std::string> commands;
   for (const CLI::App* sub : cli.get_subcommands({})) commands.push_back(sub->get_name());
@@ -228,6 +260,7 @@ int run_cli(int argc, char** argv) {
   if (eval_cmd->parsed()) return run_eval(eval);
   if (view_cmd->parsed()) return run_view(view);
   if (bench_cmd->parsed()) return run_benchmark(bench);
+  if (gen_cmd->parsed()) return run_generate(gen);
   if (live_cmd->parsed()) {
     if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
     if (!live.dataset_options.intrinsics.empty()) live.watch_options.intrinsics = live.dataset_options.intrinsics;

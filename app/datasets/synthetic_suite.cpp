@@ -1,0 +1,47 @@
+#include "datasets/synthetic_suite.h"
+
+namespace app {
+
+std::vector<SyntheticCase> hard_case_suite() {
+  std::vector<SyntheticCase> suite;
+  auto add = [&](std::string name, std::string what, SyntheticOptions o) {
+    suite.push_back({std::move(name), std::move(what), o});
+  };
+  SyntheticOptions o;
+  o.frames = 200;
+  o.shake_peak_rate = 0.3;
+  add("slow_shake", "200 frames, yaw shake peaking at 0.3 rad/s", o);
+
+  o = SyntheticOptions::hard_motion();
+  o.frames = 200;
+  add("fast_rotation", "200 frames, 2.2 rad/s, 1/60 s exposure, Kinect noise, 5% holes", o);
+
+  o.shake_peak_rate = 3.0;
+  o.exposure = 1.0 / 30;
+  o.depth_holes = 0.15;
+  add("blur_and_holes", "200 frames, 3 rad/s, 1/30 s exposure, Kinect noise, 15% holes", o);
+
+  o = SyntheticOptions{};
+  o.frames = 300;
+  o.laps = 1;
+  o.focal_error = 0.01;
+  add("loop_focal_error", "300 frames, one lap back to the start, focal length 1% off", o);
+
+  o = SyntheticOptions{};
+  o.frames = 300;
+  o.laps = 1;
+  o.shake_peak_rate = 2.0;
+  o.exposure = 1.0 / 30;
+  o.blur_samples = 4;
+  add("loop_blur", "300 frames, one lap, 2 rad/s, 1/30 s exposure", o);
+
+  o = SyntheticOptions{};
+  o.frames = 700;
+  o.laps = 2;
+  o.shake_peak_rate = 0.5;
+  o.depth_noise = 0.0015;
+  add("long_two_laps", "700 frames, two laps, 0.5 rad/s, Kinect noise", o);
+  return suite;
+}
+
+}  // namespace app

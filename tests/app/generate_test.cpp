@@ -1,0 +1,66 @@
+// gslam generate: synthetic sequences that reconstruct and benchmark read as they read real ones.
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "app/run_gslam.h"
+#include "datasets/dataset.h"
+#include "datasets/synthetic_suite.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using gslam::test::RunResult;
+using gslam::test::TempDir;
+
+TEST(CliGenerate, WritesASequenceThatReadsBackWithItsGroundTruth) {
+  TempDir dir;
+  const std::string out = (dir / "seq").string();
+  const RunResult r = run_gslam("generate " + out + " --frames 4 --width 40 --height 30 --depth-holes 0.1 --focal-error 0.02");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const app::Dataset d = app::open_dataset(dir / "seq", {});
+  ASSERT_EQ(d.entries.size(), 4u);
+  for (const app::DatasetEntry& e : d.entries) EXPECT_TRUE(e.T_world_cam_truth.has_value());
+  EXPECT_NEAR(d.intrinsics.fx, 260 * 1.02, 1e-6) << "intrinsics.txt carries the focal error";
+  const splat::RgbdFrame f = d.load(0);
+  EXPECT_EQ(f.width(), 40);
+  EXPECT_EQ(f.height(), 30);
+  std::size_t holes = 0;
+  for (const float z : f.depth) holes += !(z > 0);
+  EXPECT_GT(holes, 0u) << "--depth-holes leaves pixels without depth";
+}
+
+TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
+  TempDir dir;
+  const std::string out = (dir / "seq").string();
+  ASSERT_EQ(run_gslam("generate " + out + " --frames 2 --width 16 --height 12").exit_code, 0);
+  const RunResult again = run_gslam("generate " + out + " --frames 3 --width 16 --height 12");
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_EQ(again.output, "error: " + out + ": not empty; give --overwrite to replace what is there\n");
+  const RunResult replaced = run_gslam("generate " + out + " --frames 3 --width 16 --height 12 --overwrite");
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  EXPECT_EQ(app::open_dataset(dir / "seq", {}).entries.size(), 3u);
+  const RunResult suite = run_gslam("generate " + (dir / "suite").string() + " --suite --frames 3");
+  EXPECT_NE(suite.exit_code, 0);
+  EXPECT_EQ(suite.output, "error: gslam generate: --frames describes one sequence; --suite writes its own\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "suite"));
+}
+
+// The suite holds each hard case that docs/tuning.md names, under distinct folder names.
+TEST(SyntheticSuite, CoversTheHardCases) {
+  const std::vector<app::SyntheticCase> suite = app::hard_case_suite();
+  std::set<std::string> names;
+  bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false, long_one = false;
+  for (const app::SyntheticCase& c : suite) {
+    EXPECT_TRUE(names.insert(c.name).second) << c.name;
+    fast |= c.options.shake_peak_rate >= 2;
+    blur |= c.options.exposure > 0 && c.options.blur_samples > 1;
+    holes |= c.options.depth_holes >= 0.1;
+    loop |= c.options.laps > 0;
+    miscalibrated |= c.options.focal_error != 0;
+    long_one |= c.options.frames >= 700;
+  }
+  EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one);
+}
+
+}  // namespace
