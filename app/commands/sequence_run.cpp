@@ -166,8 +166,14 @@ bool run_planned_sequence(const RunPlan& plan, std::size_t index) {
   const Outcome outcome = run_commands(plan, index);
   write_json(result, {{"status", outcome.status}, {"error", outcome.error}});
   const std::string& name = plan.sequences[index].name;
-  if (outcome.status == "ok") {
-    std::fprintf(stderr, "  %s: finished\n", name.c_str());
+  if (outcome.status == "ok" && plan.options.evaluate) {
+    const BenchmarkRow r = row_of<BenchmarkRow>(plan, index, outcome);
+    std::fprintf(stderr, "  %s: ATE %.2f cm, PSNR %.2f dB, %.2f frames/s", name.c_str(), r.ate_cm, r.psnr_db, r.fps_overall);
+    if (r.baseline_ate_cm) std::fprintf(stderr, "; OpenCV odometry ATE %.2f cm", *r.baseline_ate_cm);
+    std::fprintf(stderr, "\n");
+  } else if (outcome.status == "ok") {
+    const BatchRow r = row_of<BatchRow>(plan, index, outcome);
+    std::fprintf(stderr, "  %s: %zu frames, %zu Gaussians, %.2f frames/s\n", name.c_str(), r.frames, r.gaussians, r.fps);
   } else {
     std::fprintf(stderr, "  %s: %s: %s\n", name.c_str(), outcome.status.c_str(), outcome.error.c_str());
   }
