@@ -5,6 +5,7 @@
 #include <fstream>
 #include <optional>
 
+#include "io/json_file.h"
 #include "splat/error.h"
 
 namespace app {
@@ -45,10 +46,7 @@ nlohmann::json row_json(const BatchRow& r) {
 
 BatchRow read_batch_row(const std::string& sequence, const std::filesystem::path& run) {
   const std::filesystem::path file = run / "summary.json";
-  std::ifstream in(file);
-  if (!in) throw splat::Error(file.string() + ": cannot open file");
-  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
-  if (summary.is_discarded() || !summary.is_object()) throw splat::Error(file.string() + ": not a JSON object");
+  const nlohmann::json summary = read_json_object(file);
   BatchRow r;
   r.sequence = sequence;
   try {

@@ -5,19 +5,13 @@
 #include <set>
 
 #include "io/atomic_file.h"
+#include "io/json_file.h"
 #include "io/run_folder.h"
 #include "io/slam_config_io.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
-
-nlohmann::json read_json_or_null(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) return nullptr;
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  return j.is_discarded() ? nlohmann::json() : j;
-}
 
 std::filesystem::path absolute_or_empty(const std::filesystem::path& p) {
   return p.empty() ? p : std::filesystem::absolute(p).lexically_normal();

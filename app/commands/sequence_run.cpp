@@ -14,17 +14,11 @@
 #include "commands/evaluation.h"
 #include "commands/progress.h"
 #include "io/atomic_file.h"
+#include "io/json_file.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
-
-nlohmann::json read_json_or_null(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) return nullptr;
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  return j.is_discarded() ? nlohmann::json() : j;
-}
 
 std::vector<std::string> backend_args(const BackendChoice& b) {
   std::vector<std::string> args = {"--backend", b.backend, "--threads", std::to_string(b.threads)};

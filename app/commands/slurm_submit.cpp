@@ -82,8 +82,13 @@ int submit_to_slurm(const RunPlan& plan) {
   const std::size_t tasks = plan.to_run.size();
   const std::string array_job =
       submit(sbatch_command(slurm, name, task_script, out / "logs" / "task-%a.log", tasks));
-  const std::string merge_job =
-      submit(sbatch_command(slurm, name + "-merge", merge_script, out / "logs" / "merge.log", 0, array_job));
+  std::string merge_job;
+  try {
+    merge_job = submit(sbatch_command(slurm, name + "-merge", merge_script, out / "logs" / "merge.log", 0, array_job));
+  } catch (const splat::Error&) {
+    run_captured({"scancel", array_job});  // tasks whose table nobody would write
+    throw;
+  }
   std::printf("slurm: array job %s (%zu tasks, logs %s), merge job %s (log %s)\n", array_job.c_str(), tasks,
               (out / "logs" / "task-N.log").c_str(), merge_job.c_str(), (out / "logs" / "merge.log").c_str());
   std::fflush(stdout);
