@@ -78,6 +78,15 @@ void add_sequence_run_options(CLI::App& cmd, BenchmarkOptions& o) {
       ->needs(slurm);
 }
 
+// The commands --help lists (not the hidden ones the jobs of benchmark and batch run).
+std::vector<std::string> listed_commands(const CLI::App& cli) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : cli.get_subcommands({})) {
+    if (!sub->get_group().empty()) names.push_back(sub->get_name());
+  }
+  return names;
+}
+
 // The long names of a command's options ("--max-frames").
 std::vector<std::string> option_names(const CLI::App& cmd) {
   std::vector<std::string> names;
@@ -96,7 +105,7 @@ std::string describe_parse_error(const CLI::App& cli, const CLI::ParseError& e) 
   }
   if (!cmd && cli.remaining().empty()) {
     std::string commands;
-    for (const CLI::App* sub : cli.get_subcommands({})) commands += (commands.empty() ? "" : ", ") + sub->get_name();
+    for (const std::string& name : listed_commands(cli)) commands += (commands.empty() ? "" : ", ") + name;
     return "give a command: " + commands + " (gslam --help describes them)";
   }
   const CLI::App& in = cmd ? *cmd : cli;
@@ -245,9 +254,14 @@ int run_cli(int argc, char** argv) {
   merge_cmd->add_option("out", task_out, "The --out of benchmark or batch")->required();
 
   // A mistyped command: CLI11 would only say that one is required.
-  std::vector<std::string> commands;
-  for (const CLI::App* sub : cli.get_subcommands({})) commands.push_back(sub->get_name());
-  if (argc > 1 && argv[1][0] != '-' && std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+  const std::vector<std::string> commands = listed_commands(cli);
+  const auto known = [&](const std::string& name) {
+    for (const CLI::App* sub : cli.get_subcommands({})) {
+      if (sub->get_name() == name) return true;
+    }
+    return false;
+  };
+  if (argc > 1 && argv[1][0] != '-' && !known(argv[1])) {
     const std::optional<std::string> near = nearest_name(argv[1], commands);
     throw splat::Error(std::string("unknown command '") + argv[1] + "'" + (near ? "; did you mean '" + *near + "'?" : "") +
                        " (gslam --help lists them)");
