@@ -130,25 +130,34 @@ class SlurmTest : public testing::Test {
   static inline std::string why_not_;
 };
 
-// Three sequences as a Slurm array job give the table a local run with --jobs 2 gives (every
-// figure but times and memory), and the command reports the jobs and their progress.
+// Three sequences and a broken one as a Slurm array job give the table a local run with --jobs 2
+// gives (every figure but times and memory, and the broken one's error), and the command
+// reports the jobs and their progress.
 TEST_F(SlurmTest, BenchmarkTableEqualsALocalRunsTable) {
   TempDir dir;
   for (uint32_t k = 0; k < 3; ++k) gslam::test::write_tiny_sequence(dir / "suite" / ("room_" + std::to_string(k)), 5, k + 1);
+  std::filesystem::create_directories(dir / "suite" / "broken");
+  gslam::test::write_text(dir / "suite" / "broken" / "rgb.txt", "0.0 rgb/missing.png\n");
+  gslam::test::write_text(dir / "suite" / "broken" / "depth.txt", "0.0 depth/missing.png\n");
   const std::string common = "benchmark " + (dir / "suite").string() + " --backend cpu --threads 1 --config " +
                              gslam::test::write_quick_config(dir / "quick.json").string();
   const auto local = run_gslam(common + " --out " + (dir / "local").string() + " --jobs 2");
-  ASSERT_EQ(local.exit_code, 0) << local.output;
+  EXPECT_EQ(local.exit_code, 1) << "broken fails: " << local.output;
   const auto slurm = gslam(common + " --out " + (dir / "slurm").string() + " --slurm --cpus-per-task 1");
-  ASSERT_EQ(slurm.exit_code, 0) << slurm.output;
+  EXPECT_EQ(slurm.exit_code, 1) << "broken fails: " << slurm.output;
+  EXPECT_NE(slurm.output.find("benchmark: 1 of 4 sequences failed"), std::string::npos) << slurm.output;
 
   EXPECT_NE(job_id(slurm.output, "array"), "") << slurm.output;
   EXPECT_NE(job_id(slurm.output, "merge"), "") << slurm.output;
-  EXPECT_NE(slurm.output.find("3 of 3 ended"), std::string::npos) << slurm.output;
+  EXPECT_NE(slurm.output.find("4 of 4 ended"), std::string::npos) << slurm.output;
   const nlohmann::json local_table = read_json(dir / "local" / "benchmark.json");
   const nlohmann::json slurm_table = read_json(dir / "slurm" / "benchmark.json");
-  ASSERT_EQ(local_table.at("sequences").size(), 3u) << local_table.dump(2);
-  for (const auto& row : slurm_table.at("sequences")) EXPECT_EQ(row.at("status"), "ok") << row;
+  ASSERT_EQ(local_table.at("sequences").size(), 4u) << local_table.dump(2);
+  const auto& rows = slurm_table.at("sequences");
+  ASSERT_EQ(rows.size(), 4u) << slurm_table.dump(2);
+  EXPECT_EQ(rows[0].at("status"), "failed") << rows[0];
+  EXPECT_NE(rows[0].at("error").get<std::string>().find("reconstruct: error: "), std::string::npos) << rows[0];
+  for (std::size_t k = 1; k < rows.size(); ++k) EXPECT_EQ(rows[k].at("status"), "ok") << rows[k];
   EXPECT_EQ(rows_without_timings(slurm_table), rows_without_timings(local_table))
       << "slurm:\n" << slurm_table.dump(2) << "\nlocal:\n" << local_table.dump(2);
   EXPECT_NE(slurm.output.find(gslam::test::read_text(dir / "slurm" / "benchmark.md")), std::string::npos)
