@@ -90,6 +90,9 @@ class SlurmTest : public testing::Test {
   static void SetUpTestSuite() { cluster_ = SlurmCluster::start(why_not_); }
   static void TearDownTestSuite() { cluster_.reset(); }
   void SetUp() override {
+#ifdef GSLAM_REQUIRE_SLURM_TESTS
+    if (!cluster_) GTEST_FAIL() << "no test Slurm cluster (GSLAM_REQUIRE_SLURM_TESTS): " << why_not_;
+#endif
     if (!cluster_) GTEST_SKIP() << "no test Slurm cluster: " << why_not_;
   }
 
