@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages gslam builds with, skipping those already present. slurm-wlm
-# and munge serve the --slurm tests, which start their own cluster; no system service is started.
+# and munge serve the --slurm tests, which start their own daemons; this script starts no service.
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
