@@ -86,12 +86,13 @@ Outcome run_commands(const RunPlan& plan, std::size_t index) {
   return {};
 }
 
-// What became of sequence `index`, from its files.
+// What became of sequence `index`, from its files. Only its task's files are read: a sequence
+// not to run finished before, as make_run_plan checked (checksums and all), and a task's
+// outcome file is written after its run finished; so a merge reads each run folder once.
 Outcome outcome_of(const RunPlan& plan, std::size_t index) {
-  if (finished_with_plan(plan, index)) return {};
   const auto task = std::find(plan.to_run.begin(), plan.to_run.end(), index);
-  const std::filesystem::path log =
-      task_log(plan.options.out, static_cast<std::size_t>(task - plan.to_run.begin()));  // absent if not a task
+  if (task == plan.to_run.end()) return {};
+  const std::filesystem::path log = task_log(plan.options.out, static_cast<std::size_t>(task - plan.to_run.begin()));
   // Slurm's own word on a task it cancelled or killed comes first: the task may have gone on
   // to write an outcome of its own (interrupted by the signal).
   if (const std::string slurm = slurmstepd_error(log); !slurm.empty()) return {"failed", slurm};
@@ -141,7 +142,11 @@ MergedTable merge(const RunPlan& plan, std::string (*markdown)(const std::vector
   std::vector<Row> rows;
   MergedTable table = table_files(plan);
   for (std::size_t i = 0; i < plan.sequences.size(); ++i) {
-    rows.push_back(row_of<Row>(plan, i, outcome_of(plan, i)));
+    try {
+      rows.push_back(row_of<Row>(plan, i, outcome_of(plan, i)));
+    } catch (const splat::Error& e) {  // a run folder changed since: its row says how
+      rows.push_back(row_of<Row>(plan, i, {"failed", e.what()}));
+    }
     table.failed += rows.back().status == "failed";
   }
   table.markdown = markdown(rows);

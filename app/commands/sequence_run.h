@@ -21,9 +21,10 @@ struct MergedTable {
   std::filesystem::path markdown_file, json_file;
 };
 
-// Reads every sequence's run folder (finished), outcome (failed or interrupted by itself) or
-// logs (killed or cancelled: the task's log's last line, else the sequence log's) into a row,
-// and writes OUT/benchmark.md and .json (batch: OUT/batch.md and .json).
+// Reads every sequence's run folder (finished before the plan, or its task's outcome file says
+// so), outcome (failed or interrupted by itself) or logs (killed or cancelled: Slurm's
+// slurmstepd line, else the task's log's last line, else the sequence log's) into a row, and
+// writes OUT/benchmark.md and .json (batch: OUT/batch.md and .json).
 MergedTable merge_run_tables(const RunPlan& plan);
 
 // The table merge_run_tables wrote, read back (the merge job's); nullopt if it is not there.
