@@ -62,6 +62,7 @@ int run_benchmark(const BenchmarkOptions& options) {
   if (options.slurm && !program_on_path("sbatch")) {
     throw splat::Error("--slurm: sbatch is not on PATH (install Slurm's client tools, or run without --slurm)");
   }
+  refuse_while_jobs_queued(options.out);
   const RunPlan plan = make_run_plan(options);
   write_run_plan(plan);
   std::filesystem::create_directories(plan.options.out / "logs");

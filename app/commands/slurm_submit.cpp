@@ -9,6 +9,8 @@
 #include "batch/slurm.h"
 #include "commands/interrupt.h"
 #include "commands/sequence_run.h"
+#include "io/atomic_file.h"
+#include "io/json_file.h"
 #include "splat/error.h"
 
 namespace app {
@@ -72,6 +74,20 @@ bool wait_for_jobs(const std::string& array_job, const std::string& merge_job, s
 
 }  // namespace
 
+void refuse_while_jobs_queued(const std::filesystem::path& out) {
+  const nlohmann::json jobs = read_json_or_null(out / "slurm" / "jobs.json");
+  if (!jobs.is_object() || !program_on_path("squeue")) return;
+  const CapturedRun q = run_captured(squeue_command());
+  if (q.exit_code != 0) return;  // no controller to ask: the jobs cannot be running either
+  for (const char* key : {"array_job", "merge_job"}) {
+    const std::string job = jobs.value(key, "");
+    if (!job.empty() && squeue_lists_job(q.output, job)) {
+      throw splat::Error(out.string() + ": jobs " + jobs.value("array_job", "") + " and " + jobs.value("merge_job", "") +
+                         " of an earlier --slurm run are still in squeue; wait for them, or scancel them first");
+    }
+  }
+}
+
 int submit_to_slurm(const RunPlan& plan) {
   const std::filesystem::path& out = plan.options.out;
   const std::string gslam = this_executable().string();
@@ -89,6 +105,7 @@ int submit_to_slurm(const RunPlan& plan) {
     run_captured({"scancel", array_job});  // tasks whose table nobody would write
     throw;
   }
+  write_json(out / "slurm" / "jobs.json", {{"array_job", array_job}, {"merge_job", merge_job}});
   std::printf("slurm: array job %s (%zu tasks, logs %s), merge job %s (log %s)\n", array_job.c_str(), tasks,
               (out / "logs" / "task-N.log").c_str(), merge_job.c_str(), (out / "logs" / "merge.log").c_str());
   std::fflush(stdout);

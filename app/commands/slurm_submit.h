@@ -14,4 +14,9 @@ namespace app {
 // splat::Error if sbatch refuses a job.
 int submit_to_slurm(const RunPlan& plan);
 
+// Throws splat::Error if jobs that an earlier --slurm run submitted for `out` (kept in
+// OUT/slurm/jobs.json) are still in squeue: a new plan would pull their files from under them.
+// Nothing to check without that file or without squeue.
+void refuse_while_jobs_queued(const std::filesystem::path& out);
+
 }  // namespace app

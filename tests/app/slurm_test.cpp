@@ -183,6 +183,11 @@ TEST_F(SlurmTest, ACancelledTaskIsAFailedRowAndAReRunFinishesIt) {
   const std::string array = job_id(submitted.output, "array"), merge = job_id(submitted.output, "merge");
   ASSERT_NE(array, "") << submitted.output;
   ASSERT_NE(merge, "") << submitted.output;
+  const auto meanwhile = gslam(command + " --no-wait");  // stuck keeps the array in the queue
+  EXPECT_EQ(meanwhile.exit_code, 1);
+  EXPECT_NE(meanwhile.output.find("jobs " + array + " and " + merge + " of an earlier --slurm run are still in squeue"),
+            std::string::npos)
+      << meanwhile.output;
 
   ASSERT_TRUE(wait_for_squeue_line(array + " 1 RUNNING")) << "task 1 (stuck) never ran";
   EXPECT_EQ(cluster_->run("scancel " + array + "_1").exit_code, 0);
