@@ -73,8 +73,8 @@ std::string batch_markdown(const std::vector<BatchRow>& rows) {
     }
     const std::string b = bold ? "**" : "";
     char figures[160];
-    std::snprintf(figures, sizeof figures, "%zu | %zu | %zu | %.1f | %.2f | %.0f", r.frames, r.keyframes, r.gaussians,
-                  r.seconds, r.fps, r.peak_memory_mib);
+    std::snprintf(figures, sizeof figures, "%zu | %zu | %zu | %.1f | %.2f | %.0f", r.frames,
+                  r.keyframes, r.gaussians, r.seconds, r.fps, r.peak_memory_mib);
     md += "| " + b + r.sequence + b + " | " + figures + " |\n";
   };
   for (const BatchRow& r : rows) line(r, false);

@@ -14,8 +14,8 @@ struct BatchRow {
   std::string status = "ok";  // ok, failed, interrupted
   std::string error;          // failed or interrupted: what happened (the log's last line)
   std::size_t frames = 0, keyframes = 0, gaussians = 0;
-  double seconds = 0;         // the whole run
-  double fps = 0;             // frames / seconds
+  double seconds = 0;  // the whole run
+  double fps = 0;      // frames / seconds
   double peak_memory_mib = 0;
 };
 

@@ -32,7 +32,9 @@ pid_t spawn(const std::vector<std::string>& args, posix_spawn_file_actions_t& ac
   return pid;
 }
 
-int exit_code_of(int status) { return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status); }
+int exit_code_of(int status) {
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
 
 }  // namespace
 
@@ -42,7 +44,8 @@ pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
+                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   return spawn(args, actions);
 }
@@ -50,7 +53,8 @@ pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::
 int wait_for_child(pid_t pid) {
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw splat::Error("lost child process " + std::to_string(pid) + ": " + std::strerror(errno));
+    if (errno != EINTR)
+      throw splat::Error("lost child process " + std::to_string(pid) + ": " + std::strerror(errno));
   }
   return exit_code_of(status);
 }
@@ -59,7 +63,8 @@ EndedChild wait_for_any_child() {
   int status = 0;
   pid_t pid = 0;
   while ((pid = waitpid(-1, &status, 0)) < 0) {
-    if (errno != EINTR) throw splat::Error(std::string("waiting for a child process: ") + std::strerror(errno));
+    if (errno != EINTR)
+      throw splat::Error(std::string("waiting for a child process: ") + std::strerror(errno));
   }
   return {pid, exit_code_of(status)};
 }
@@ -102,8 +107,10 @@ bool program_on_path(const std::string& program) {
   const char* path = std::getenv("PATH");
   std::istringstream dirs(path ? path : "");
   for (std::string dir; std::getline(dirs, dir, ':');) {
-    const std::filesystem::path candidate = std::filesystem::path(dir.empty() ? "." : dir) / program;
-    if (access(candidate.c_str(), X_OK) == 0 && !std::filesystem::is_directory(candidate)) return true;
+    const std::filesystem::path candidate =
+        std::filesystem::path(dir.empty() ? "." : dir) / program;
+    if (access(candidate.c_str(), X_OK) == 0 && !std::filesystem::is_directory(candidate))
+      return true;
   }
   return false;
 }

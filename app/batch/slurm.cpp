@@ -38,9 +38,12 @@ std::string parse_sbatch_job_id(const std::string& sbatch_output) {
   return m[1].str();
 }
 
-std::vector<std::string> squeue_command() { return {"squeue", "--noheader", "--array", "--format=%F %K %T"}; }
+std::vector<std::string> squeue_command() {
+  return {"squeue", "--noheader", "--array", "--format=%F %K %T"};
+}
 
-ArrayProgress squeue_progress(const std::string& squeue_output, const std::string& array_job_id, std::size_t tasks) {
+ArrayProgress squeue_progress(const std::string& squeue_output, const std::string& array_job_id,
+                              std::size_t tasks) {
   ArrayProgress p;
   std::istringstream lines(squeue_output);
   for (std::string line; std::getline(lines, line);) {
@@ -48,7 +51,8 @@ ArrayProgress squeue_progress(const std::string& squeue_output, const std::strin
     std::string job, task, state;
     if (!(fields >> job >> task >> state) || job != array_job_id) continue;
     std::string indices = task;
-    if (indices.size() > 2 && indices.front() == '[' && indices.back() == ']') indices = indices.substr(1, indices.size() - 2);
+    if (indices.size() > 2 && indices.front() == '[' && indices.back() == ']')
+      indices = indices.substr(1, indices.size() - 2);
     std::size_t n = 1;
     try {
       n = count_indices(indices);
@@ -72,8 +76,9 @@ bool squeue_lists_job(const std::string& squeue_output, const std::string& job_i
   return false;
 }
 
-std::vector<std::string> sbatch_command(const SlurmOptions& o, const std::string& name, const std::string& script,
-                                        const std::string& log, std::size_t tasks, const std::string& after_job) {
+std::vector<std::string> sbatch_command(const SlurmOptions& o, const std::string& name,
+                                        const std::string& script, const std::string& log,
+                                        std::size_t tasks, const std::string& after_job) {
   std::vector<std::string> args = {"sbatch", "--job-name=" + name, "--output=" + log};
   if (tasks > 0) args.push_back("--array=0-" + std::to_string(tasks - 1));
   if (!after_job.empty()) args.push_back("--dependency=afterany:" + after_job);

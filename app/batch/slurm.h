@@ -32,7 +32,8 @@ std::vector<std::string> squeue_command();
 // The progress of array job `array_job_id` of `tasks` tasks from squeue_command()'s output.
 // Tasks still pending before the scheduler split them show as one line with a range
 // ("0-3", "0,2,5-7", "0-9%2"), counted in full.
-ArrayProgress squeue_progress(const std::string& squeue_output, const std::string& array_job_id, std::size_t tasks);
+ArrayProgress squeue_progress(const std::string& squeue_output, const std::string& array_job_id,
+                              std::size_t tasks);
 
 // Whether job `job_id` (not an array) still appears in squeue_command()'s output.
 bool squeue_lists_job(const std::string& squeue_output, const std::string& job_id);
@@ -41,8 +42,8 @@ bool squeue_lists_job(const std::string& squeue_output, const std::string& job_i
 // tasks == 0), named `name`, its output to `log` (%a: the task index), after job
 // `after_job` has ended in any state if it is not empty.
 std::vector<std::string> sbatch_command(const SlurmOptions& options, const std::string& name,
-                                        const std::string& script, const std::string& log, std::size_t tasks,
-                                        const std::string& after_job = "");
+                                        const std::string& script, const std::string& log,
+                                        std::size_t tasks, const std::string& after_job = "");
 
 // The last line slurmstepd wrote into a job's output file `log` ("slurmstepd: error: *** JOB 12
 // ON node CANCELLED AT ... ***", or DUE TO TIME LIMIT, or an out-of-memory kill): why Slurm

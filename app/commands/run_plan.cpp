@@ -24,27 +24,35 @@ std::vector<FoundSequence> listed_sequences(const std::filesystem::path& list) {
   std::vector<FoundSequence> found;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
-    const std::size_t first = line.find_first_not_of(" \t\r"), last = line.find_last_not_of(" \t\r");
+    const std::size_t first = line.find_first_not_of(" \t\r"),
+                      last = line.find_last_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    const std::filesystem::path dir = (list.parent_path() / line.substr(first, last - first + 1)).lexically_normal();
-    const std::vector<FoundSequence> here = std::filesystem::is_directory(dir) ? find_sequences(dir, 0)
-                                                                                : std::vector<FoundSequence>();
+    const std::filesystem::path dir =
+        (list.parent_path() / line.substr(first, last - first + 1)).lexically_normal();
+    const std::vector<FoundSequence> here =
+        std::filesystem::is_directory(dir) ? find_sequences(dir, 0) : std::vector<FoundSequence>();
     if (here.empty()) {
       throw splat::Error(list.string() + " line " + std::to_string(number) + ": " + dir.string() +
                          " is not a sequence folder");
     }
     found.push_back(here.front());
   }
-  std::sort(found.begin(), found.end(), [](const FoundSequence& a, const FoundSequence& b) { return a.name < b.name; });
+  std::sort(found.begin(), found.end(),
+            [](const FoundSequence& a, const FoundSequence& b) { return a.name < b.name; });
   return found;
 }
 
 nlohmann::json options_json(const BenchmarkOptions& o) {
-  return {{"evaluate", o.evaluate},   {"root", o.root},
-          {"out", o.out},             {"config_file", o.config},
-          {"test_every", o.test_every}, {"max_frames", o.max_frames},
-          {"baseline", o.baseline},   {"backend", o.backend.backend},
-          {"device", o.backend.device}, {"threads", o.backend.threads}};
+  return {{"evaluate", o.evaluate},
+          {"root", o.root},
+          {"out", o.out},
+          {"config_file", o.config},
+          {"test_every", o.test_every},
+          {"max_frames", o.max_frames},
+          {"baseline", o.baseline},
+          {"backend", o.backend.backend},
+          {"device", o.backend.device},
+          {"threads", o.backend.threads}};
 }
 
 BenchmarkOptions options_from_json(const nlohmann::json& j) {
@@ -74,17 +82,20 @@ RunPlan make_run_plan(const BenchmarkOptions& options) {
   const bool list = !options.evaluate && std::filesystem::is_regular_file(root);
   plan.sequences = list ? listed_sequences(root) : find_sequences(root);
   if (plan.sequences.empty()) {
-    throw splat::Error(root.string() + ": no sequence found below it (TUM or plain rgb.txt + depth.txt, Replica "
+    throw splat::Error(root.string() +
+                       ": no sequence found below it (TUM or plain rgb.txt + depth.txt, Replica "
                        "results/ + traj.txt, or rgb/ + depth/ + intrinsics.txt folders)");
   }
   std::set<std::string> names;
   for (FoundSequence& s : plan.sequences) {
     s.path = absolute_or_empty(s.path);
     if (!names.insert(s.name).second) {
-      throw splat::Error(root.string() + ": two sequences named '" + s.name + "'; their run folders would collide");
+      throw splat::Error(root.string() + ": two sequences named '" + s.name +
+                         "'; their run folders would collide");
     }
   }
-  plan.config = slam_config_to_json(load_slam_config(plan.options.config));  // a bad file costs nothing
+  plan.config =
+      slam_config_to_json(load_slam_config(plan.options.config));  // a bad file costs nothing
   for (std::size_t i = 0; i < plan.sequences.size(); ++i) {
     if (!finished_with_plan(plan, i)) plan.to_run.push_back(i);
   }
@@ -93,7 +104,8 @@ RunPlan make_run_plan(const BenchmarkOptions& options) {
 
 void write_run_plan(const RunPlan& plan) {
   nlohmann::json sequences = nlohmann::json::array();
-  for (const FoundSequence& s : plan.sequences) sequences.push_back({{"name", s.name}, {"path", s.path}});
+  for (const FoundSequence& s : plan.sequences)
+    sequences.push_back({{"name", s.name}, {"path", s.path}});
   std::filesystem::create_directories(plan.options.out);
   write_json(plan.options.out / "plan.json", {{"options", options_json(plan.options)},
                                               {"config", plan.config},
@@ -105,13 +117,15 @@ void write_run_plan(const RunPlan& plan) {
   for (const auto& e : std::filesystem::directory_iterator(out / "logs", ec)) {
     if (e.path().filename().string().starts_with("task-")) std::filesystem::remove(e.path());
   }
-  for (const char* table : {"benchmark.md", "benchmark.json", "batch.md", "batch.json"}) std::filesystem::remove(out / table);
+  for (const char* table : {"benchmark.md", "benchmark.json", "batch.md", "batch.json"})
+    std::filesystem::remove(out / table);
 }
 
 RunPlan read_run_plan(const std::filesystem::path& out) {
   const std::filesystem::path file = out / "plan.json";
   const nlohmann::json j = read_json_or_null(file);
-  if (!j.is_object()) throw splat::Error(file.string() + ": missing or not JSON (written by gslam benchmark/batch)");
+  if (!j.is_object())
+    throw splat::Error(file.string() + ": missing or not JSON (written by gslam benchmark/batch)");
   try {
     RunPlan plan;
     plan.options = options_from_json(j.at("options"));
@@ -121,7 +135,9 @@ RunPlan read_run_plan(const std::filesystem::path& out) {
     }
     plan.to_run = j.at("to_run").get<std::vector<std::size_t>>();
     for (std::size_t i : plan.to_run) {
-      if (i >= plan.sequences.size()) throw splat::Error(file.string() + ": task of sequence " + std::to_string(i) + " out of range");
+      if (i >= plan.sequences.size())
+        throw splat::Error(file.string() + ": task of sequence " + std::to_string(i) +
+                           " out of range");
     }
     return plan;
   } catch (const nlohmann::json::exception& e) {
@@ -133,11 +149,14 @@ bool finished_with_plan(const RunPlan& plan, std::size_t index) {
   const std::filesystem::path run = run_folder(plan, index);
   const BenchmarkOptions& o = plan.options;
   const nlohmann::json summary = read_json_or_null(run / "summary.json");
-  if (!summary.is_object() || !summary.value("complete", false) || !summary.contains("input")) return false;
+  if (!summary.is_object() || !summary.value("complete", false) || !summary.contains("input"))
+    return false;
   if (o.evaluate && !std::filesystem::exists(run / "eval.json")) return false;
   const nlohmann::json& input = summary["input"];
-  if (input.value("dataset", "") != plan.sequences[index].path.string() || input.value("test_every", -1) != o.test_every ||
-      input.value("max_frames", -1) != o.max_frames || input.value("config", nlohmann::json()) != plan.config) {
+  if (input.value("dataset", "") != plan.sequences[index].path.string() ||
+      input.value("test_every", -1) != o.test_every ||
+      input.value("max_frames", -1) != o.max_frames ||
+      input.value("config", nlohmann::json()) != plan.config) {
     return false;
   }
   try {
@@ -145,8 +164,8 @@ bool finished_with_plan(const RunPlan& plan, std::size_t index) {
   } catch (const splat::Error&) {
     return false;
   }
-  return !o.evaluate ||
-         std::filesystem::last_write_time(run / "eval.json") >= std::filesystem::last_write_time(run / "summary.json");
+  return !o.evaluate || std::filesystem::last_write_time(run / "eval.json") >=
+                            std::filesystem::last_write_time(run / "summary.json");
 }
 
 std::filesystem::path run_folder(const RunPlan& plan, std::size_t index) {

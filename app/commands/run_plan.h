@@ -16,7 +16,7 @@ struct RunPlan {
   BenchmarkOptions options;              // paths absolute
   nlohmann::json config;                 // the effective SLAM settings (defaults and --config)
   std::vector<FoundSequence> sequences;  // all of them, sorted by name; paths absolute
-  std::vector<std::size_t> to_run;       // the tasks: indices of the sequences not finished with these settings
+  std::vector<std::size_t> to_run;       // the tasks: sequences not finished with these settings
 };
 
 // Finds the sequences (a folder, or for batch a text file listing sequence folders, one per

@@ -32,8 +32,9 @@ double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   const std::filesystem::path dir = o.out / "baselines", record = dir / (s.name + ".json");
   const std::string dataset = s.path.string();
   const nlohmann::json kept = read_json_or_null(record);
-  if (kept.is_object() && kept.value("dataset", "") == dataset && kept.value("max_frames", -1) == o.max_frames &&
-      kept.contains("ate_rmse_cm") && kept["ate_rmse_cm"].is_number()) {
+  if (kept.is_object() && kept.value("dataset", "") == dataset &&
+      kept.value("max_frames", -1) == o.max_frames && kept.contains("ate_rmse_cm") &&
+      kept["ate_rmse_cm"].is_number()) {
     return kept["ate_rmse_cm"].get<double>();
   }
   DatasetOptions options;
@@ -50,8 +51,11 @@ double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   const double ate_cm = 100 * evaluate_trajectory(baseline.poses, truth).ate_rmse;
   std::filesystem::create_directories(dir);
   write_tum_trajectory(dir / (s.name + ".txt"), baseline.poses);
-  write_json(record, {{"dataset", dataset}, {"max_frames", o.max_frames}, {"ate_rmse_cm", ate_cm},
-                      {"failures", baseline.failures}, {"method", "cv::rgbd::RgbdOdometry, frame to frame, defaults"}});
+  write_json(record, {{"dataset", dataset},
+                      {"max_frames", o.max_frames},
+                      {"ate_rmse_cm", ate_cm},
+                      {"failures", baseline.failures},
+                      {"method", "cv::rgbd::RgbdOdometry, frame to frame, defaults"}});
   return ate_cm;
 }
 
@@ -69,15 +73,17 @@ Outcome run_commands(const RunPlan& plan, std::size_t index) {
   if (std::filesystem::exists(run / "checkpoint.bin")) {
     reconstruct.push_back("--resume");  // an interrupted run continues where it stopped
   } else {
-    reconstruct.insert(reconstruct.end(), {s.path.string(), "--overwrite", "--test-every", std::to_string(o.test_every),
-                                           "--max-frames", std::to_string(o.max_frames)});
+    reconstruct.insert(reconstruct.end(), {s.path.string(), "--overwrite", "--test-every",
+                                           std::to_string(o.test_every), "--max-frames",
+                                           std::to_string(o.max_frames)});
     if (!o.config.empty()) reconstruct.insert(reconstruct.end(), {"--config", o.config.string()});
   }
   for (const std::string& a : backend_args(o.backend)) reconstruct.push_back(a);
   const int code = run_logged(reconstruct, log);
   const nlohmann::json summary = read_json_or_null(run / "summary.json");
   if (code != 0) return {"failed", "reconstruct: " + last_line(log)};
-  if (!(summary.is_object() && summary.value("complete", false))) return {"interrupted", "the same command resumes it"};
+  if (!(summary.is_object() && summary.value("complete", false)))
+    return {"interrupted", "the same command resumes it"};
   if (!o.evaluate) return {};
   std::vector<std::string> eval = {gslam, "eval", run.string()};
   for (const std::string& a : backend_args(o.backend)) eval.push_back(a);
@@ -92,7 +98,8 @@ Outcome run_commands(const RunPlan& plan, std::size_t index) {
 Outcome outcome_of(const RunPlan& plan, std::size_t index) {
   const auto task = std::find(plan.to_run.begin(), plan.to_run.end(), index);
   if (task == plan.to_run.end()) return {};
-  const std::filesystem::path log = task_log(plan.options.out, static_cast<std::size_t>(task - plan.to_run.begin()));
+  const std::filesystem::path log =
+      task_log(plan.options.out, static_cast<std::size_t>(task - plan.to_run.begin()));
   // Slurm's own word on a task it cancelled or killed comes first: the task may have gone on
   // to write an outcome of its own (interrupted by the signal).
   if (const std::string slurm = slurmstepd_error(log); !slurm.empty()) return {"failed", slurm};
@@ -150,7 +157,8 @@ MergedTable merge(const RunPlan& plan, std::string (*markdown)(const std::vector
     table.failed += rows.back().status == "failed";
   }
   table.markdown = markdown(rows);
-  write_atomically(table.markdown_file, [&](const std::filesystem::path& tmp) { std::ofstream(tmp) << table.markdown; });
+  write_atomically(table.markdown_file,
+                   [&](const std::filesystem::path& tmp) { std::ofstream(tmp) << table.markdown; });
   write_json(table.json_file, json(rows));
   return table;
 }
@@ -167,14 +175,18 @@ bool run_planned_sequence(const RunPlan& plan, std::size_t index) {
   const std::string& name = plan.sequences[index].name;
   if (outcome.status == "ok" && plan.options.evaluate) {
     const BenchmarkRow r = row_of<BenchmarkRow>(plan, index, outcome);
-    std::fprintf(stderr, "  %s: ATE %.2f cm, PSNR %.2f dB, %.2f frames/s", name.c_str(), r.ate_cm, r.psnr_db, r.fps_overall);
-    if (r.baseline_ate_cm) std::fprintf(stderr, "; OpenCV odometry ATE %.2f cm", *r.baseline_ate_cm);
+    std::fprintf(stderr, "  %s: ATE %.2f cm, PSNR %.2f dB, %.2f frames/s", name.c_str(), r.ate_cm,
+                 r.psnr_db, r.fps_overall);
+    if (r.baseline_ate_cm)
+      std::fprintf(stderr, "; OpenCV odometry ATE %.2f cm", *r.baseline_ate_cm);
     std::fprintf(stderr, "\n");
   } else if (outcome.status == "ok") {
     const BatchRow r = row_of<BatchRow>(plan, index, outcome);
-    std::fprintf(stderr, "  %s: %zu frames, %zu Gaussians, %.2f frames/s\n", name.c_str(), r.frames, r.gaussians, r.fps);
+    std::fprintf(stderr, "  %s: %zu frames, %zu Gaussians, %.2f frames/s\n", name.c_str(), r.frames,
+                 r.gaussians, r.fps);
   } else {
-    std::fprintf(stderr, "  %s: %s: %s\n", name.c_str(), outcome.status.c_str(), outcome.error.c_str());
+    std::fprintf(stderr, "  %s: %s: %s\n", name.c_str(), outcome.status.c_str(),
+                 outcome.error.c_str());
   }
   return outcome.status == "ok";
 }
@@ -190,7 +202,8 @@ std::optional<MergedTable> read_merged_table(const RunPlan& plan) {
   const nlohmann::json json = read_json_or_null(table.json_file);
   if (!markdown || !json.is_object() || !json.contains("sequences")) return std::nullopt;
   table.markdown.assign(std::istreambuf_iterator<char>(markdown), {});
-  for (const nlohmann::json& row : json["sequences"]) table.failed += row.value("status", "") == "failed";
+  for (const nlohmann::json& row : json["sequences"])
+    table.failed += row.value("status", "") == "failed";
   return table;
 }
 
@@ -199,8 +212,8 @@ int report_table(const MergedTable& table, const RunPlan& plan) {
   std::fflush(stdout);
   std::fprintf(stderr, "tables: %s, %s\n", table.markdown_file.c_str(), table.json_file.c_str());
   if (table.failed == 0) return 0;
-  std::fprintf(stderr, "%s: %zu of %zu sequences failed\n", plan.options.evaluate ? "benchmark" : "batch", table.failed,
-               plan.sequences.size());
+  std::fprintf(stderr, "%s: %zu of %zu sequences failed\n",
+               plan.options.evaluate ? "benchmark" : "batch", table.failed, plan.sequences.size());
   return 1;
 }
 

@@ -35,7 +35,8 @@ inline nlohmann::json read_json(const std::filesystem::path& path) {
 inline nlohmann::json rows_without_timings(const nlohmann::json& table) {
   nlohmann::json rows = table.at("sequences");
   for (nlohmann::json& row : rows) {
-    for (const char* varies : {"fps_through", "fps_overall", "fps", "seconds", "peak_memory_mib"}) row.erase(varies);
+    for (const char* varies : {"fps_through", "fps_overall", "fps", "seconds", "peak_memory_mib"})
+      row.erase(varies);
   }
   return rows;
 }

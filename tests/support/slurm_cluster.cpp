@@ -44,7 +44,8 @@ int free_port() {
 }
 
 // Starts `args` with its output to `log`; -1 if it cannot be.
-pid_t spawn_logged(const std::vector<std::string>& args, const std::filesystem::path& log, const std::vector<std::string>& env) {
+pid_t spawn_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
+                   const std::vector<std::string>& env) {
   std::vector<char*> argv, envp;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -55,7 +56,8 @@ pid_t spawn_logged(const std::vector<std::string>& args, const std::filesystem::
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
+                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   pid_t pid = -1;
   const int failed = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
@@ -82,9 +84,11 @@ std::unique_ptr<SlurmCluster> SlurmCluster::start(std::string& why_not) {
     why_not = "a test Slurm cluster needs root (slurmd runs jobs as their users)";
     return nullptr;
   }
-  for (const char* program : {"munged", "slurmctld", "slurmd", "sbatch", "squeue", "scontrol", "scancel", "sinfo"}) {
+  for (const char* program :
+       {"munged", "slurmctld", "slurmd", "sbatch", "squeue", "scontrol", "scancel", "sinfo"}) {
     if (!program_available(program)) {
-      why_not = std::string(program) + " is not installed (scripts/install_deps.sh installs slurm-wlm and munge)";
+      why_not = std::string(program) +
+                " is not installed (scripts/install_deps.sh installs slurm-wlm and munge)";
       return nullptr;
     }
   }
@@ -108,36 +112,38 @@ std::string SlurmCluster::start_daemons() {
   ::chmod((d / "munge.key").c_str(), 0400);
   const std::filesystem::path socket = d / "munge.socket";
   const int controller_port = free_port(), node_port = free_port();
-  if (controller_port == 0 || node_port == 0 || controller_port == node_port) return "no free loopback port";
+  if (controller_port == 0 || node_port == 0 || controller_port == node_port)
+    return "no free loopback port";
   conf_ = d / "slurm.conf";
-  std::ofstream(conf_) << "ClusterName=gslamtest\n"
-                       << "SlurmctldHost=localhost\n"
-                       << "SlurmctldPort=" << controller_port << "\n"
-                       << "SlurmdPort=" << node_port << "\n"
-                       << "AuthType=auth/munge\nAuthInfo=socket=" << socket.string() << "\n"
-                       << "ProctrackType=proctrack/linuxproc\nTaskPlugin=task/none\n"
-                       << "SelectType=select/cons_tres\nSelectTypeParameters=CR_CPU\n"
-                       << "MpiDefault=none\nReturnToService=2\nSlurmUser=root\n"
-                       << "AccountingStorageType=accounting_storage/none\nJobAcctGatherType=jobacct_gather/none\n"
-                       << "JobCompType=jobcomp/none\n"
-                       << "KillWait=5\n"  // a cancelled task's processes get SIGKILL 5 s after SIGTERM
-                       << "StateSaveLocation=" << (d / "state").string() << "\n"
-                       << "SlurmdSpoolDir=" << (d / "spool").string() << "\n"
-                       << "SlurmctldPidFile=" << (d / "slurmctld.pid").string() << "\n"
-                       << "SlurmdPidFile=" << (d / "slurmd.pid").string() << "\n"
-                       << "SlurmctldLogFile=" << (d / "slurmctld.log").string() << "\n"
-                       << "SlurmdLogFile=" << (d / "slurmd.log").string() << "\n"
-                       << "NodeName=localhost CPUs=" << kCpus << " State=UNKNOWN\n"
-                       << "PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP\n";
+  std::ofstream(conf_)
+      << "ClusterName=gslamtest\n"
+      << "SlurmctldHost=localhost\n"
+      << "SlurmctldPort=" << controller_port << "\n"
+      << "SlurmdPort=" << node_port << "\n"
+      << "AuthType=auth/munge\nAuthInfo=socket=" << socket.string() << "\n"
+      << "ProctrackType=proctrack/linuxproc\nTaskPlugin=task/none\n"
+      << "SelectType=select/cons_tres\nSelectTypeParameters=CR_CPU\n"
+      << "MpiDefault=none\nReturnToService=2\nSlurmUser=root\n"
+      << "AccountingStorageType=accounting_storage/none\nJobAcctGatherType=jobacct_gather/none\n"
+      << "JobCompType=jobcomp/none\n"
+      << "KillWait=5\n"  // a cancelled task's processes get SIGKILL 5 s after SIGTERM
+      << "StateSaveLocation=" << (d / "state").string() << "\n"
+      << "SlurmdSpoolDir=" << (d / "spool").string() << "\n"
+      << "SlurmctldPidFile=" << (d / "slurmctld.pid").string() << "\n"
+      << "SlurmdPidFile=" << (d / "slurmd.pid").string() << "\n"
+      << "SlurmctldLogFile=" << (d / "slurmctld.log").string() << "\n"
+      << "SlurmdLogFile=" << (d / "slurmd.log").string() << "\n"
+      << "NodeName=localhost CPUs=" << kCpus << " State=UNKNOWN\n"
+      << "PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP\n";
   const std::vector<std::string> env = {"SLURM_CONF=" + conf_.string()};
   struct Daemon {
     std::vector<std::string> args;
     std::string log;
   };
   const std::vector<Daemon> daemons = {
-      {{"munged", "--foreground", "--key-file=" + (d / "munge.key").string(), "--socket=" + socket.string(),
-        "--pid-file=" + (d / "munged.pid").string(), "--log-file=" + (d / "munged.log").string(),
-        "--seed-file=" + (d / "munged.seed").string()},
+      {{"munged", "--foreground", "--key-file=" + (d / "munge.key").string(),
+        "--socket=" + socket.string(), "--pid-file=" + (d / "munged.pid").string(),
+        "--log-file=" + (d / "munged.log").string(), "--seed-file=" + (d / "munged.seed").string()},
        "munged.out"},
       {{"slurmctld", "-D", "-c", "-f", conf_.string()}, "slurmctld.out"},
       {{"slurmd", "-D", "-N", "localhost", "-f", conf_.string()}, "slurmd.out"},
@@ -152,7 +158,8 @@ std::string SlurmCluster::start_daemons() {
       while (!std::filesystem::exists(socket)) {
         if (exited(pid)) {
           daemons_.pop_back();
-          return "munged exited: " + last_line_of(d / daemon.log) + " " + last_line_of(d / "munged.log");
+          return "munged exited: " + last_line_of(d / daemon.log) + " " +
+                 last_line_of(d / "munged.log");
         }
         if (std::chrono::steady_clock::now() > deadline) return "munged made no socket in time";
         std::this_thread::sleep_for(kPoll);
@@ -170,14 +177,17 @@ bool SlurmCluster::wait_for_node_idle(std::string& why_not) const {
     if (state == "idle\n") return true;
     std::this_thread::sleep_for(kPoll);
   }
-  why_not = "the node did not become idle (sinfo: '" + state + "'; slurmctld.log: " +
-            last_line_of(dir_ / "slurmctld.log") + "; slurmd.log: " + last_line_of(dir_ / "slurmd.log") + ")";
+  why_not = "the node did not become idle (sinfo: '" + state +
+            "'; slurmctld.log: " + last_line_of(dir_ / "slurmctld.log") +
+            "; slurmd.log: " + last_line_of(dir_ / "slurmd.log") + ")";
   return false;
 }
 
 std::string SlurmCluster::command(const std::string& command) const {
   std::string line = "SLURM_CONF=";
-  line.append(conf_.string()).append(" ").append(command);  // a temp path: no character the shell treats specially
+  line.append(conf_.string())
+      .append(" ")
+      .append(command);  // a temp path: no character the shell treats specially
   return line;
 }
 
@@ -195,10 +205,12 @@ void SlurmCluster::stop() {
   // munged last: the others authenticate through it until they are down.
   for (auto it = daemons_.rbegin(); it != daemons_.rend(); ++it) {
     const pid_t pid = *it;
-    if (!all_up || pid == daemons_.front()) ::kill(pid, SIGTERM);  // scontrol shutdown stopped the others
+    if (!all_up || pid == daemons_.front())
+      ::kill(pid, SIGTERM);  // scontrol shutdown stopped the others
     auto deadline = std::chrono::steady_clock::now() + kExitTimeout;
     bool gone = false;
-    while (!(gone = exited(pid)) && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(kPoll);
+    while (!(gone = exited(pid)) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(kPoll);
     if (!gone) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, nullptr, 0);
