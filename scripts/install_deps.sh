@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages gslam builds with, skipping those already present.
+# Installs the Debian 12 packages gslam builds with, skipping those already present. slurm-wlm
+# and munge serve the --slurm tests, which start their own daemons; this script starts no service.
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
@@ -9,6 +10,7 @@ packages=(
   libglfw3-dev libgl-dev libgl1-mesa-dri xvfb xauth
   clang libclang-rt-14-dev
   ffmpeg
+  slurm-wlm munge
 )
 missing=()
 for p in "${packages[@]}"; do

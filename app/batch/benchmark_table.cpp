@@ -3,18 +3,11 @@
 #include <cstdio>
 #include <fstream>
 
+#include "io/json_file.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
-
-nlohmann::json read_json_file(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw splat::Error(path.string() + ": cannot open file");
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) throw splat::Error(path.string() + ": not a JSON object");
-  return j;
-}
 
 std::string format(const char* pattern, double value) {
   char text[64];
@@ -25,8 +18,8 @@ std::string format(const char* pattern, double value) {
 }  // namespace
 
 BenchmarkRow read_benchmark_row(const std::string& sequence, const std::filesystem::path& run) {
-  const nlohmann::json summary = read_json_file(run / "summary.json");
-  const nlohmann::json eval = read_json_file(run / "eval.json");
+  const nlohmann::json summary = read_json_object(run / "summary.json");
+  const nlohmann::json eval = read_json_object(run / "eval.json");
   BenchmarkRow r;
   r.sequence = sequence;
   try {

@@ -3,39 +3,116 @@
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <array>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 
 #include "splat/error.h"
 
 extern char** environ;
 
 namespace app {
+namespace {
 
-std::filesystem::path this_executable() { return std::filesystem::read_symlink("/proc/self/exe"); }
-
-int run_logged(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  if (args.empty()) throw splat::Error("run_logged: no program given");
+// Spawns `args` with `actions` applied to its file descriptors (posix_spawnp: PATH lookup).
+pid_t spawn(const std::vector<std::string>& args, posix_spawn_file_actions_t& actions) {
+  if (args.empty()) throw splat::Error("spawn: no program given");
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int failed = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (failed != 0) throw splat::Error(args[0] + ": cannot start: " + std::strerror(failed));
+  return pid;
+}
+
+int exit_code_of(int status) {
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+}  // namespace
+
+std::filesystem::path this_executable() { return std::filesystem::read_symlink("/proc/self/exe"); }
+
+pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
+                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = 0;
-  const int failed = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (failed != 0) throw splat::Error(args[0] + ": cannot start: " + std::strerror(failed));
+  return spawn(args, actions);
+}
+
+int wait_for_child(pid_t pid) {
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw splat::Error(args[0] + ": lost its child process: " + std::strerror(errno));
+    if (errno != EINTR)
+      throw splat::Error("lost child process " + std::to_string(pid) + ": " + std::strerror(errno));
   }
-  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
-  return WEXITSTATUS(status);
+  return exit_code_of(status);
+}
+
+EndedChild wait_for_any_child() {
+  int status = 0;
+  pid_t pid = 0;
+  while ((pid = waitpid(-1, &status, 0)) < 0) {
+    if (errno != EINTR)
+      throw splat::Error(std::string("waiting for a child process: ") + std::strerror(errno));
+  }
+  return {pid, exit_code_of(status)};
+}
+
+int run_logged(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  return wait_for_child(start_logged(args, log));
+}
+
+CapturedRun run_captured(const std::vector<std::string>& args) {
+  int fds[2];
+  if (pipe2(fds, O_CLOEXEC) != 0) throw splat::Error(std::string("pipe: ") + std::strerror(errno));
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
+  pid_t pid = 0;
+  try {
+    pid = spawn(args, actions);
+  } catch (...) {
+    close(fds[0]);
+    close(fds[1]);
+    throw;
+  }
+  close(fds[1]);
+  CapturedRun r;
+  std::array<char, 4096> buffer;
+  for (;;) {
+    const ssize_t n = read(fds[0], buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    r.output.append(buffer.data(), static_cast<std::size_t>(n));
+  }
+  close(fds[0]);
+  r.exit_code = wait_for_child(pid);
+  return r;
+}
+
+bool program_on_path(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  std::istringstream dirs(path ? path : "");
+  for (std::string dir; std::getline(dirs, dir, ':');) {
+    const std::filesystem::path candidate =
+        std::filesystem::path(dir.empty() ? "." : dir) / program;
+    if (access(candidate.c_str(), X_OK) == 0 && !std::filesystem::is_directory(candidate))
+      return true;
+  }
+  return false;
 }
 
 std::string last_line(const std::filesystem::path& file) {

@@ -1,6 +1,9 @@
-// Running a program as a child process with its output in a log file (gslam benchmark runs
-// each sequence's reconstruct and eval so, each with its own memory and failure).
+// Running programs as child processes: with their output in a log file (gslam benchmark runs
+// each sequence's reconstruct and eval so, each with its own memory and failure), several at
+// once (--jobs), or with their output captured (sbatch, squeue).
 #pragma once
+#include <sys/types.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -10,10 +13,33 @@ namespace app {
 // The running gslam executable (/proc/self/exe).
 std::filesystem::path this_executable();
 
-// Runs `args` (args[0] the program) with standard input closed and standard output and error
-// appended to `log`; waits for it. Returns its exit code, or 128 + the signal that ended it.
-// Throws splat::Error if it cannot be started.
+// Starts `args` (args[0] the program, found on PATH if it has no '/') with standard input closed
+// and standard output and error appended to `log`; does not wait. Throws splat::Error if it
+// cannot be started.
+pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log);
+
+// Waits for a child started above. Returns its exit code, or 128 + the signal that ended it.
+int wait_for_child(pid_t pid);
+
+struct EndedChild {
+  pid_t pid = 0;
+  int exit_code = 0;  // as wait_for_child
+};
+// Waits for whichever child of this process ends first. Throws splat::Error if there is none.
+EndedChild wait_for_any_child();
+
+// start_logged, then wait_for_child.
 int run_logged(const std::vector<std::string>& args, const std::filesystem::path& log);
+
+struct CapturedRun {
+  int exit_code = 0;   // as wait_for_child
+  std::string output;  // standard output and error together
+};
+// Runs `args` as run_logged does, its output captured instead of logged.
+CapturedRun run_captured(const std::vector<std::string>& args);
+
+// Whether `program` is a file on PATH that can be run.
+bool program_on_path(const std::string& program);
 
 // The last non-empty line of a text file (a failed child's error), "" if none.
 std::string last_line(const std::filesystem::path& file);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 
 #include "splat/error.h"
 
@@ -55,6 +56,38 @@ void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->check(CLI::Range(0, 256))->capture_default_str();
 }
 
+// The options benchmark and batch share: the settings of every run, and where the runs go.
+void add_sequence_run_options(CLI::App& cmd, BenchmarkOptions& o) {
+  cmd.add_option("--config", o.config, "JSON file with SLAM settings, the same for every sequence");
+  cmd.add_option("--max-frames", o.max_frames, "Use only the first N frames of each sequence")->check(CLI::NonNegativeNumber);
+  add_backend_options(cmd, o.backend);
+  auto* jobs = cmd.add_option("--jobs", o.jobs, "Sequences run at once on this machine, each a child process")
+                   ->check(CLI::Range(1, 256))
+                   ->capture_default_str();
+  auto* slurm = cmd.add_flag("--slurm", o.slurm,
+                             "Run the sequences as one Slurm array job (sbatch), and merge their table in a job after "
+                             "it; --out, the sequences and gslam must be on a filesystem the nodes share");
+  slurm->excludes(jobs);
+  cmd.add_option("--partition", o.slurm_options.partition, "--slurm: the partition (default: the cluster's)")->needs(slurm);
+  cmd.add_option("--time", o.slurm_options.time_limit, "--slurm: time limit of each task, as sbatch --time (e.g. 2:00:00)")
+      ->needs(slurm);
+  cmd.add_option("--cpus-per-task", o.slurm_options.cpus_per_task, "--slurm: CPUs for each task")
+      ->check(CLI::Range(1, 4096))
+      ->needs(slurm);
+  cmd.add_flag_callback("--no-wait", [&o] { o.wait = false; },
+                        "--slurm: print the job ids and return; the table appears in --out when the merge job ends")
+      ->needs(slurm);
+}
+
+// The commands --help lists (not the hidden ones the jobs of benchmark and batch run).
+std::vector<std::string> listed_commands(const CLI::App& cli) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : cli.get_subcommands({})) {
+    if (!sub->get_group().empty()) names.push_back(sub->get_name());
+  }
+  return names;
+}
+
 // The long names of a command's options ("--max-frames").
 std::vector<std::string> option_names(const CLI::App& cmd) {
   std::vector<std::string> names;
@@ -73,7 +106,7 @@ std::string describe_parse_error(const CLI::App& cli, const CLI::ParseError& e) 
   }
   if (!cmd && cli.remaining().empty()) {
     std::string commands;
-    for (const CLI::App* sub : cli.get_subcommands({})) commands += (commands.empty() ? "" : ", ") + sub->get_name();
+    for (const std::string& name : listed_commands(cli)) commands += (commands.empty() ? "" : ", ") + name;
     return "give a command: " + commands + " (gslam --help describes them)";
   }
   const CLI::App& in = cmd ? *cmd : cli;
@@ -193,14 +226,33 @@ int run_cli(int argc, char** argv) {
       ->required();
   bench_cmd->add_option("--out", bench.out, "Output folder: a run folder per sequence, logs/, benchmark.md and .json")
       ->required();
-  bench_cmd->add_option("--config", bench.config, "JSON file with SLAM settings, the same for every sequence");
   bench_cmd->add_option("--test-every", bench.test_every, "Hold out every N-th frame as a test view (reconstruct --test-every)")
       ->check(kTestEvery);
-  bench_cmd->add_option("--max-frames", bench.max_frames, "Use only the first N frames of each sequence")
-      ->check(CLI::NonNegativeNumber);
   bench_cmd->add_flag_callback("--no-baseline", [&bench] { bench.baseline = false; },
                                "Leave out the OpenCV RGB-D odometry baseline");
-  add_backend_options(*bench_cmd, bench.backend);
+  add_sequence_run_options(*bench_cmd, bench);
+
+  BenchmarkOptions batch;
+  batch.evaluate = false;
+  batch.baseline = false;
+  CLI::App* batch_cmd = cli.add_subcommand(
+      "batch", "Reconstruct every sequence under a folder or in a list, with the same settings; print their summary table");
+  batch_cmd->add_option("sequences", batch.root,
+                        "Folder of sequences (any layout, at any depth), or a text file naming sequence folders, one a "
+                        "line (relative to the file)")
+      ->required();
+  batch_cmd->add_option("--out", batch.out, "Output folder: a run folder per sequence, logs/, batch.md and .json")
+      ->required();
+  add_sequence_run_options(*batch_cmd, batch);
+
+  // What the jobs of benchmark and batch run (--jobs, --slurm); hidden from --help.
+  std::filesystem::path task_out;
+  std::size_t task_index = 0;
+  CLI::App* task_cmd = cli.add_subcommand("benchmark-task", "Run task INDEX of the plan in OUT")->group("");
+  task_cmd->add_option("out", task_out, "The --out of benchmark or batch")->required();
+  task_cmd->add_option("index", task_index, "Task index (the Slurm array task id)")->required();
+  CLI::App* merge_cmd = cli.add_subcommand("benchmark-merge", "Merge the run folders of the plan in OUT into its table")->group("");
+  merge_cmd->add_option("out", task_out, "The --out of benchmark or batch")->required();
 
   GenerateOptions gen;
   CLI::App* gen_cmd = cli.add_subcommand(
@@ -234,9 +286,14 @@ int run_cli(int argc, char** argv) {
   });
 
   // A mistyped command: CLI11 would only say that one is required.
-  std::vector<std::string> commands;
-  for (const CLI::App* sub : cli.get_subcommands({})) commands.push_back(sub->get_name());
-  if (argc > 1 && argv[1][0] != '-' && std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+  const std::vector<std::string> commands = listed_commands(cli);
+  const auto known = [&](const std::string& name) {
+    for (const CLI::App* sub : cli.get_subcommands({})) {
+      if (sub->get_name() == name) return true;
+    }
+    return false;
+  };
+  if (argc > 1 && argv[1][0] != '-' && !known(argv[1])) {
     const std::optional<std::string> near = nearest_name(argv[1], commands);
     throw splat::Error(std::string("unknown command '") + argv[1] + "'" + (near ? "; did you mean '" + *near + "'?" : "") +
                        " (gslam --help lists them)");
@@ -260,6 +317,9 @@ int run_cli(int argc, char** argv) {
   if (eval_cmd->parsed()) return run_eval(eval);
   if (view_cmd->parsed()) return run_view(view);
   if (bench_cmd->parsed()) return run_benchmark(bench);
+  if (batch_cmd->parsed()) return run_benchmark(batch);
+  if (task_cmd->parsed()) return run_benchmark_task(task_out, task_index);
+  if (merge_cmd->parsed()) return run_benchmark_merge(task_out);
   if (gen_cmd->parsed()) return run_generate(gen);
   if (live_cmd->parsed()) {
     if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
