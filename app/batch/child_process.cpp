@@ -19,14 +19,19 @@ extern char** environ;
 namespace app {
 namespace {
 
-// Spawns `args` with `actions` applied to its file descriptors (posix_spawnp: PATH lookup).
-pid_t spawn(const std::vector<std::string>& args, posix_spawn_file_actions_t& actions) {
+// Spawns `args` with `actions` applied to its file descriptors (posix_spawnp: PATH lookup), in
+// this process's environment with `environment` before it.
+pid_t spawn(const std::vector<std::string>& args, posix_spawn_file_actions_t& actions,
+            const std::vector<std::string>& environment = {}) {
   if (args.empty()) throw splat::Error("spawn: no program given");
-  std::vector<char*> argv;
+  std::vector<char*> argv, envp;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  for (const std::string& e : environment) envp.push_back(const_cast<char*>(e.c_str()));
+  for (char** e = environ; *e; ++e) envp.push_back(*e);
+  envp.push_back(nullptr);
   pid_t pid = 0;
-  const int failed = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int failed = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   if (failed != 0) throw splat::Error(args[0] + ": cannot start: " + std::strerror(failed));
   return pid;
@@ -40,14 +45,15 @@ int exit_code_of(int status) {
 
 std::filesystem::path this_executable() { return std::filesystem::read_symlink("/proc/self/exe"); }
 
-pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log) {
+pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
+                   const std::vector<std::string>& environment) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
                                    O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  return spawn(args, actions);
+  return spawn(args, actions, environment);
 }
 
 int wait_for_child(pid_t pid) {

@@ -14,9 +14,11 @@ namespace app {
 std::filesystem::path this_executable();
 
 // Starts `args` (args[0] the program, found on PATH if it has no '/') with standard input closed
-// and standard output and error appended to `log`; does not wait. Throws splat::Error if it
-// cannot be started.
-pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log);
+// and standard output and error appended to `log`, in this process's environment with
+// `environment`'s NAME=value entries before it (so they win); does not wait. Throws
+// splat::Error if it cannot be started.
+pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
+                   const std::vector<std::string>& environment = {});
 
 // Waits for a child started above. Returns its exit code, or 128 + the signal that ended it.
 int wait_for_child(pid_t pid);

@@ -1,9 +1,7 @@
 #include "support/slurm_cluster.h"
 
-#include <fcntl.h>
 #include <netinet/in.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -14,7 +12,8 @@
 #include <random>
 #include <thread>
 
-extern char** environ;
+#include "batch/child_process.h"
+#include "splat/error.h"
 
 namespace gslam::test {
 namespace {
@@ -41,28 +40,6 @@ int free_port() {
   }
   ::close(fd);
   return port;
-}
-
-// Starts `args` with its output to `log`; -1 if it cannot be.
-pid_t spawn_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
-                   const std::vector<std::string>& env) {
-  std::vector<char*> argv, envp;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  std::vector<std::string> environment = env;
-  for (char** e = environ; *e; ++e) environment.push_back(*e);
-  for (std::string& e : environment) envp.push_back(e.data());
-  envp.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = -1;
-  const int failed = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&actions);
-  return failed == 0 ? pid : -1;
 }
 
 // Whether child `pid` has exited (reaping it).
@@ -149,8 +126,12 @@ std::string SlurmCluster::start_daemons() {
       {{"slurmd", "-D", "-N", "localhost", "-f", conf_.string()}, "slurmd.out"},
   };
   for (const Daemon& daemon : daemons) {
-    const pid_t pid = spawn_logged(daemon.args, d / daemon.log, env);
-    if (pid < 0) return daemon.args[0] + ": cannot start";
+    pid_t pid = -1;
+    try {
+      pid = app::start_logged(daemon.args, d / daemon.log, env);
+    } catch (const splat::Error& e) {
+      return e.what();
+    }
     daemons_.push_back(pid);
     if (daemon.args[0] == "munged") {
       // slurmctld authenticates through the socket at once: wait for it.
