@@ -11,6 +11,14 @@
 
 namespace app {
 
+double residual_ratio(double scale, std::vector<double> recent) {
+  if (recent.size() < 5) return 0;
+  std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
+  // Never below the sensor noise: on noise-free depth the median is far under it, and a surface
+  // coming into view read as lost at a correct pose (docs/tuning.md).
+  return scale / std::max(recent[recent.size() / 2], 1.0);
+}
+
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
     : rasterizer_(rasterizer), config_(config), exposure_(config_.odometry) {}
 
@@ -81,13 +89,11 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   record.tracked = r.converged;
   record.reason = r.reason;
   record.residual_scale = r.depth_scale;
-  if (r.converged && residual_scales_.size() >= 5 && config_.odometry.depth_weight > 0) {
-    std::vector<double> recent(residual_scales_.begin(), residual_scales_.end());
-    std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
-    const double median = recent[recent.size() / 2];
-    if (r.depth_scale > config_.lost_residual_factor * median) {
+  if (r.converged && config_.odometry.depth_weight > 0) {
+    const double ratio = residual_ratio(r.depth_scale, {residual_scales_.begin(), residual_scales_.end()});
+    if (ratio > config_.lost_residual_factor) {
       record.tracked = false;
-      record.reason = "depth residuals " + std::to_string(r.depth_scale / median) + " times the recent median";
+      record.reason = "depth residuals " + std::to_string(ratio) + " times the recent median (or the sensor noise)";
     }
   }
   record.overlap = r.overlap;

@@ -44,6 +44,12 @@ struct FrameRecord {
   std::size_t gaussians = 0;  // in the map after this frame
 };
 
+// An odometry alignment's depth residual scale (units of the modelled sensor noise, depth_noise
+// z^2) over the median of the `recent` tracked frames' scales, that median taken as at least the
+// sensor noise (1): a frame is lost above SlamConfig::lost_residual_factor. 0 while fewer than
+// five frames are recent.
+double residual_ratio(double scale, std::vector<double> recent);
+
 class FrameTracker {
  public:
   FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config);

@@ -44,7 +44,7 @@ struct SlamConfig {
   // median of the last frames' has found a wrong pose (a camera carried elsewhere still overlaps
   // its reference somewhere): the frame counts as lost, and recovery and relocalization follow.
   // The kidnapped synthetic camera's wrong pose: 1194x; the most of a good frame on teddy: 4.4x,
-  // on 7-Scenes below 3x.
+  // on 7-Scenes below 3x. The median counts as at least the sensor noise (residual_ratio).
   double lost_residual_factor = 10.0;
   // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
   // since the last keyframe.
