@@ -8,8 +8,14 @@
 namespace app {
 namespace {
 
+// With `overwrite`, what an earlier generate wrote into `dir` goes first (so that no frame of a
+// longer sequence stays behind); whatever else the folder holds stays.
 void write_one(const std::filesystem::path& dir, const SyntheticOptions& options, bool overwrite) {
-  if (overwrite) std::filesystem::remove_all(dir);
+  if (overwrite) {
+    for (const char* entry : {"rgb", "depth", "rgb.txt", "depth.txt", "intrinsics.txt", "groundtruth.txt"}) {
+      std::filesystem::remove_all(dir / entry);
+    }
+  }
   write_synthetic_sequence(dir, options);
 }
 

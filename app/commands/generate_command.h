@@ -8,7 +8,7 @@ namespace app {
 struct GenerateOptions {
   std::filesystem::path out;
   bool suite = false;      // the hard-case suite (synthetic_suite.h), a folder per case
-  bool overwrite = false;  // replace what an earlier generate wrote there
+  bool overwrite = false;  // replace what an earlier generate wrote there (nothing else)
   SyntheticOptions sequence;  // one sequence (without `suite`)
 };
 
