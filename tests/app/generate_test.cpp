@@ -1,4 +1,5 @@
 // gslam generate: synthetic sequences that reconstruct and benchmark read as they read real ones.
+#include <fstream>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -37,9 +38,11 @@ TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
   const RunResult again = run_gslam("generate " + out + " --frames 3 --width 16 --height 12");
   EXPECT_NE(again.exit_code, 0);
   EXPECT_EQ(again.output, "error: " + out + ": not empty; give --overwrite to replace what is there\n");
+  std::ofstream(dir / "seq" / "notes.txt") << "mine\n";
   const RunResult replaced = run_gslam("generate " + out + " --frames 3 --width 16 --height 12 --overwrite");
   ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
   EXPECT_EQ(app::open_dataset(dir / "seq", {}).entries.size(), 3u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "seq" / "notes.txt")) << "only what generate writes is replaced";
   const RunResult suite = run_gslam("generate " + (dir / "suite").string() + " --suite --frames 3");
   EXPECT_NE(suite.exit_code, 0);
   EXPECT_EQ(suite.output, "error: gslam generate: --frames describes one sequence; --suite writes its own\n");
