@@ -25,8 +25,10 @@ scripts/cross_test_arm64.sh
 scripts/fuzz.sh "${GSLAM_FUZZ_SECONDS:-20}"
 fuzz_build=${GSLAM_FUZZ_BUILD_DIR:-build-fuzz}
 cmake --build "$fuzz_build"
-# One test is left out there: the two-lap loop-closure sequence (600 tracked and mapped frames)
-# takes over 20 minutes under ASan. Its parts run there in smaller tests: the pose graph, place
-# recognition, the mapper's keyframe corrections, the look-alike and kidnapped sequences.
+# Four end-to-end tests are left out there (they run in the main suite above): under ASan the
+# two-lap loop-closure sequence takes over 20 minutes and the exposure, hard-motion and look-alike
+# sequences 3-6 minutes each, which would put CI past its budget. Their parts run there in smaller
+# tests: the pose graph, place recognition, the exposure model, the odometry's blur weighting, the
+# mapper's keyframe corrections, the kidnapped sequence.
 GSLAM_TEST_TIME_SCALE=8 ctest --test-dir "$fuzz_build" --output-on-failure --timeout 1800 -j "$(nproc)" \
-  -E 'TwoLapsLoopClosureRemovesOdometryDrift'
+  -E 'TwoLapsLoopClosureRemovesOdometryDrift|ExposureEstimate.MeasuresTheExposureTheFramesWereBlurredOver|HardMotionSyntheticSequenceTracksEveryFrame|LookAlikePlaceIsNotTakenForALoop'
