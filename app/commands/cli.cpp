@@ -277,10 +277,12 @@ int run_cli(int argc, char** argv) {
       ->check(CLI::Range(0.0, 0.99));
   gen_cmd->add_option("--focal-error", seq.focal_error, "intrinsics.txt's focal length off by this fraction")
       ->check(CLI::Range(-0.5, 0.5));
+  gen_cmd->add_flag("--movers", seq.movers,
+                    "People and objects moving through the room: a person walking across, a chair pushed, a crate appearing");
   gen_cmd->add_option("--seed", seq.seed, "Random seed (noise, holes)");
   gen_cmd->callback([gen_cmd, &gen] {
     for (const char* flag : {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
-                             "--depth-noise", "--depth-holes", "--focal-error", "--seed"}) {
+                             "--depth-noise", "--depth-holes", "--focal-error", "--movers", "--seed"}) {
       if (gen.suite && gen_cmd->count(flag) > 0) throw CLI::ValidationError(std::string(flag) + " describes one sequence; --suite writes its own");
     }
   });

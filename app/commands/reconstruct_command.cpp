@@ -124,7 +124,10 @@ int run_reconstruct(const ReconstructOptions& o) {
     const std::vector<LoopEvent> loops = slam.loop_events();
     for (; loops_reported < loops.size(); ++loops_reported) std::fprintf(stderr, "\n%s\n", describe(loops[loops_reported]).c_str());
     outputs.add(record, loading_ms);
-    progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes()) + " keyframes");
+    std::string moving;
+    if (record.moving_share > 0) moving = ", " + std::to_string(std::lround(100 * record.moving_share)) + "% moving";
+    progress.update(i + 1, std::to_string(record.gaussians) + " Gaussians, " + std::to_string(slam.keyframes()) + " keyframes" +
+                               moving);
     if ((i + 1) % every == 0) {
       outputs.update_poses(slam.trajectory());
       const bool with_map = (i + 1) % (5 * every) == 0;

@@ -69,6 +69,7 @@ RunOutputs::RunOutputs(std::filesystem::path out, std::string input, const splat
       r.held_out = f.at("held_out").get<bool>();
       r.renders = f.at("renders").get<int>();
       r.overlap = f.at("overlap").get<double>();
+      r.moving_share = f.value("moving_share", 0.0);
       r.tracking_ms = f.at("tracking_ms").get<double>();
       r.mapping_ms = f.at("mapping_ms").get<double>();
       r.gaussians = f.at("gaussians").get<std::size_t>();
@@ -87,7 +88,7 @@ nlohmann::json RunOutputs::state() const {
   for (const FrameRecord& r : records_) {
     frames.push_back({{"timestamp", r.timestamp}, {"T_world_cam", pose_to_json(r.T_world_cam)},
                       {"tracked", r.tracked}, {"retried", r.retried}, {"relocalized", r.relocalized}, {"reason", r.reason},
-                      {"keyframe", r.keyframe}, {"held_out", r.held_out}, {"renders", r.renders}, {"overlap", r.overlap},
+                      {"keyframe", r.keyframe}, {"held_out", r.held_out}, {"renders", r.renders}, {"overlap", r.overlap}, {"moving_share", r.moving_share},
                       {"tracking_ms", r.tracking_ms}, {"mapping_ms", r.mapping_ms}, {"gaussians", r.gaussians}});
   }
   return {{"run_id", run_id_}, {"seconds", elapsed_seconds()}, {"tracking_ms", tracking_ms_},
@@ -165,6 +166,15 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
       {"peak_memory_mib", peak_memory_mib()},
       {"device_memory_mib", static_cast<double>(rasterizer_.device_memory_bytes()) / (1 << 20)},
   };
+  // Moving objects left out of tracking and mapping: their share of each frame's pixels.
+  double moving_sum = 0, moving_max = 0;
+  std::size_t moving_frames = 0;
+  for (const FrameRecord& r : records_) {
+    moving_sum += r.moving_share;
+    moving_max = std::max(moving_max, r.moving_share);
+    moving_frames += r.moving_share > 0;
+  }
+  j["dynamic"] = {{"masked_share_mean", moving_sum / n}, {"masked_share_max", moving_max}, {"frames_with_moving", moving_frames}};
   if (has_errors_) {
     j["ate_rmse_m"] = errors_.ate_rmse;
     j["ate_matched_frames"] = errors_.matched;

@@ -23,9 +23,14 @@ namespace {
 
 using Eigen::Vector3d;
 
+// Class ids of the label images (labels/classes.json names them).
+enum Label : uint16_t { kWall = 1, kFloor, kCeiling, kBall, kCabinet, kPerson, kChair, kCrate };
+
 struct Hit {
   double t = std::numeric_limits<double>::infinity();
   Vector3d point, normal, color;
+  uint16_t label = 0;
+  bool moving = false;  // on an object that moves during the sequence
 };
 
 double checker(double a, double b, double size) {
@@ -44,8 +49,8 @@ class Scene {
       const Vector3d shift(kRoomLength * copy, 0, 0);
       sphere(o, d, Vector3d(-0.6, 0.9, 0.4) + shift, 0.6, hit, 0);
       sphere(o, d, Vector3d(0.9, 1.15, -0.5) + shift, 0.35, hit, 1);
-      box(o, d, Vector3d(0.2, 0.7, 1.1) + shift, Vector3d(0.9, 1.5, 1.6) + shift, hit);
-      box(o, d, Vector3d(-1.8, 0.3, -1.6) + shift, Vector3d(-1.1, 1.5, -0.9) + shift, hit);
+      box(o, d, Vector3d(0.2, 0.7, 1.1) + shift, Vector3d(0.9, 1.5, 1.6) + shift, hit, kCabinet);
+      box(o, d, Vector3d(-1.8, 0.3, -1.6) + shift, Vector3d(-1.1, 1.5, -0.9) + shift, hit, kCabinet);
     }
   }
 
@@ -71,6 +76,8 @@ class Scene {
         p.x() = std::fmod(p.x() + 2.5, kRoomLength) - 2.5;
         hit.normal = Vector3d::Zero();
         hit.normal[axis] = side ? -1 : 1;
+        hit.label = axis != 1 ? kWall : side ? kFloor : kCeiling;  // y down: the floor at +1.5
+        hit.moving = false;
         // Each wall its own colours, tiled in 0.4 m squares with a fine stripe texture.
         const double c = checker(p[a], p[b], 0.4);
         const double stripe = 0.5 + 0.5 * std::sin(p[a] * 25.0) * std::sin(p[b] * 17.0);
@@ -81,6 +88,8 @@ class Scene {
     }
   }
 
+  // style 0 and 1: the two balls' colours; 2: skin (a head).
+ public:
   static void sphere(const Vector3d& o, const Vector3d& d, const Vector3d& c, double r, Hit& hit, int style) {
     const Vector3d oc = o - c;
     const double b = oc.dot(d), disc = b * b - (oc.squaredNorm() - r * r);
@@ -92,24 +101,30 @@ class Scene {
     hit.normal = (hit.point - c) / r;
     const double u = std::atan2(hit.normal.z(), hit.normal.x()), v = std::acos(std::clamp(hit.normal.y(), -1.0, 1.0));
     const double bands = checker(u * 4 / M_PI, v * 6 / M_PI, 1.0);
-    hit.color = style == 0 ? Vector3d(0.9, 0.75 * bands + 0.1, 0.1) : Vector3d(0.1, 0.4 + 0.4 * bands, 0.9);
+    hit.color = style == 0 ? Vector3d(0.9, 0.75 * bands + 0.1, 0.1)
+                : style == 1 ? Vector3d(0.1, 0.4 + 0.4 * bands, 0.9)
+                             : Vector3d(0.85, 0.65, 0.5) * (0.9 + 0.1 * bands);
+    hit.label = style == 2 ? kPerson : kBall;
+    hit.moving = style == 2;
   }
 
-  static void box(const Vector3d& o, const Vector3d& d, const Vector3d& lo, const Vector3d& hi, Hit& hit) {
+  // Returns whether it hit (nearer than before); colours it as the static boxes are.
+  static bool box(const Vector3d& o, const Vector3d& d, const Vector3d& lo, const Vector3d& hi, Hit& hit,
+                  uint16_t label) {
     double t0 = 1e-6, t1 = hit.t;
     int axis_hit = -1;
     for (int a = 0; a < 3; ++a) {
       if (std::abs(d[a]) < 1e-12) {
-        if (o[a] < lo[a] || o[a] > hi[a]) return;
+        if (o[a] < lo[a] || o[a] > hi[a]) return false;
         continue;
       }
       double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
       if (ta > tb) std::swap(ta, tb);
       if (ta > t0) t0 = ta, axis_hit = a;
       t1 = std::min(t1, tb);
-      if (t0 > t1) return;
+      if (t0 > t1) return false;
     }
-    if (axis_hit < 0 || t0 >= hit.t) return;
+    if (axis_hit < 0 || t0 >= hit.t) return false;
     hit.t = t0;
     hit.point = o + t0 * d;
     hit.normal = Vector3d::Zero();
@@ -117,8 +132,49 @@ class Scene {
     const int a = (axis_hit + 1) % 3, b = (axis_hit + 2) % 3;
     const double c = checker(hit.point[a], hit.point[b], 0.1);
     hit.color = Vector3d(0.25 + 0.6 * c, 0.2 + 0.3 * (axis_hit == 1), 0.6 - 0.4 * c);
+    hit.label = label;
+    hit.moving = label == kPerson || label == kChair || label == kCrate;
+    return true;
   }
 };
+
+// What moves through the room with SyntheticOptions::movers, at `seconds` into the sequence: a
+// person (1.78 m, 0.44 m wide) walking across the room at 1.3 m/s between the camera and the
+// objects, a chair pushed a metre along the floor and left there, and a crate that appears on
+// the floor. Positions for the arc path (the default), which looks across them.
+class Movers {
+ public:
+  static void intersect(const Vector3d& o, const Vector3d& d, double seconds, Hit& hit) {
+    // The person: from x = -2.2 from 0.3 s, across to x = 2.2, a slight bob at the stride.
+    constexpr double kStart = 0.3, kSpeed = 1.3, kFrom = -2.2, kTo = 2.2;
+    const double walked = (seconds - kStart) * kSpeed;
+    if (walked > 0 && kFrom + walked < kTo) {
+      const double x = kFrom + walked, z = -0.5, bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
+      const Vector3d lo(x - 0.22, -0.05 + bob, z - 0.13), hi(x + 0.22, 1.5, z + 0.13);
+      if (Scene::box(o, d, lo, hi, hit, kPerson)) {
+        // A shirt with stripes above the waist, dark trousers below.
+        const double local_y = hit.point.y() - bob;
+        hit.color = local_y < 0.75 ? Vector3d(0.75, 0.2, 0.25) * (0.75 + 0.25 * checker(local_y, 0, 0.08))
+                                   : Vector3d(0.12, 0.14, 0.3);
+      }
+      Scene::sphere(o, d, Vector3d(x, -0.17 + bob, z), 0.11, hit, 2);
+    }
+    // The chair: pushed from x = 1.7 to 0.7 between 1.5 and 2.5 s.
+    const double push = std::clamp(seconds - 1.5, 0.0, 1.0);
+    const double chair_x = 1.7 - push;
+    if (Scene::box(o, d, Vector3d(chair_x - 0.22, 0.6, 0.08), Vector3d(chair_x + 0.22, 1.5, 0.52), hit, kChair)) {
+      hit.color = Vector3d(0.55, 0.35, 0.15) * (0.7 + 0.3 * checker(hit.point.x() + hit.point.z(), hit.point.y(), 0.15));
+    }
+    // The crate: there from 2.8 s on.
+    if (seconds >= 2.8) Scene::box(o, d, Vector3d(-0.4, 1.2, -0.3), Vector3d(0.0, 1.5, 0.1), hit, kCrate);
+  }
+};
+
+void trace(const Scene& scene, const SyntheticOptions& o, const Vector3d& origin, const Vector3d& direction,
+           double seconds, Hit& hit) {
+  scene.intersect(origin, direction, hit);
+  if (o.movers) Movers::intersect(origin, direction, seconds, hit);
+}
 
 // Camera to world at `eye` looking at `target`, image rows level (world y is down).
 Eigen::Isometry3d look_from(const Vector3d& eye, const Vector3d& target) {
@@ -185,6 +241,20 @@ std::vector<uint8_t> hole_mask(int w, int h, double fraction, std::mt19937& rng)
   return hole;
 }
 
+// Whether pixel (x, y) lies on the outline of a moving object: it or a 4-neighbour is on one,
+// and their depths differ by more than 10 cm.
+bool edge_of_mover(const std::vector<double>& z, const std::vector<uint8_t>& moving, int w, int h, int x, int y) {
+  const std::size_t i = static_cast<std::size_t>(y) * w + x;
+  const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+  for (int k = 0; k < 4; ++k) {
+    const int nx = x + dx[k], ny = y + dy[k];
+    if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+    const std::size_t j = static_cast<std::size_t>(ny) * w + nx;
+    if ((moving[i] || moving[j]) && std::abs(z[i] - z[j]) > 0.1) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 SyntheticOptions SyntheticOptions::hard_motion() {
@@ -208,6 +278,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::normal_distribution<double> gauss(0, 1);
   std::filesystem::create_directories(dir / "rgb");
   std::filesystem::create_directories(dir / "depth");
+  std::filesystem::create_directories(dir / "labels");
   const Scene scene(o.twin_rooms);
   splat::ThreadPool pool;
   const Vector3d light = Vector3d(0.4, -1.0, 0.3).normalized();  // from above (y down)
@@ -218,49 +289,65 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     const double seconds = f / o.fps, timestamp = 1000.0 + seconds;
     const Eigen::Isometry3d pose = camera_pose(o, seconds);  // mid-exposure: the ground truth
     // Colour over the exposure: 2x2 supersamples per instant, the instants spread evenly.
-    std::vector<Eigen::Isometry3d> instants;
+    std::vector<std::pair<Eigen::Isometry3d, double>> instants;  // pose, seconds
     for (int k = 0; k < o.blur_samples; ++k) {
-      const double at = o.blur_samples > 1 ? (k + 0.5) / o.blur_samples - 0.5 : 0.0;
-      instants.push_back(camera_pose(o, seconds + at * o.exposure));
+      const double at = seconds + (o.blur_samples > 1 ? (k + 0.5) / o.blur_samples - 0.5 : 0.0) * o.exposure;
+      instants.emplace_back(camera_pose(o, at), at);
     }
     const std::vector<uint8_t> holes = hole_mask(o.width, o.height, o.depth_holes, rng);
     std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
-    splat::Image16 depth(o.width, o.height, 1);
+    splat::Image16 depth(o.width, o.height, 1), labels(o.width, o.height, 1);
     // Colour, row by row on every core (no random numbers: the same image on any machine).
     pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {
       const int y = static_cast<int>(row);
       for (int x = 0; x < o.width; ++x) {
         Vector3d color = Vector3d::Zero();
         const double weight = 0.25 / static_cast<double>(instants.size());
-        for (const Eigen::Isometry3d& at : instants) {
+        for (const auto& [at, at_seconds] : instants) {
           for (int s = 0; s < 4; ++s) {
             const Vector3d dir_cam((x + 0.25 + 0.5 * (s % 2) - cx) / o.focal, (y + 0.25 + 0.5 * (s / 2) - cy) / o.focal, 1.0);
             Hit hit;
-            scene.intersect(at.translation(), (at.linear() * dir_cam).normalized(), hit);
+            trace(scene, o, at.translation(), (at.linear() * dir_cam).normalized(), at_seconds, hit);
             if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
           }
         }
         for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
       }
     });
+    // Depth and labels at the pixel centres, mid-exposure.
+    std::vector<double> z_true(static_cast<std::size_t>(o.width) * o.height, 0.0);
+    std::vector<uint8_t> moving(z_true.size(), 0), grazing(z_true.size(), 0);
     for (int y = 0; y < o.height; ++y) {
       for (int x = 0; x < o.width; ++x) {
-        // Depth at the pixel centre, mid-exposure.
+        const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
         const Vector3d ray = (pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
         Hit hit;
-        scene.intersect(pose.translation(), ray, hit);
-        const bool grazing = std::isfinite(hit.t) && std::abs(hit.normal.dot(ray)) < std::cos(80 * M_PI / 180);
-        if (std::isfinite(hit.t) && !holes[static_cast<std::size_t>(y) * o.width + x] && !(o.depth_holes > 0 && grazing)) {
-          double z = (pose.inverse() * hit.point).z();
-          if (o.depth_noise > 0) z += o.depth_noise * z * z * gauss(rng);
-          depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
+        trace(scene, o, pose.translation(), ray, seconds, hit);
+        if (!std::isfinite(hit.t)) continue;
+        z_true[i] = (pose.inverse() * hit.point).z();
+        labels.at(x, y) = hit.label;
+        moving[i] = hit.moving;
+        grazing[i] = std::abs(hit.normal.dot(ray)) < std::cos(80 * M_PI / 180);
+      }
+    }
+    for (int y = 0; y < o.height; ++y) {
+      for (int x = 0; x < o.width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
+        if (z_true[i] <= 0 || holes[i] || (o.depth_holes > 0 && grazing[i])) continue;
+        // A depth camera loses most pixels along a moving object's outline (mixed returns).
+        if (o.movers && edge_of_mover(z_true, moving, o.width, o.height, x, y) && std::uniform_real_distribution<>(0, 1)(rng) < 0.6) {
+          continue;
         }
+        double z = z_true[i];
+        if (o.depth_noise > 0) z += o.depth_noise * z * z * gauss(rng);
+        depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
       }
     }
     char name[64];
     std::snprintf(name, sizeof(name), "%.6f.png", timestamp);
     write_png_rgb(dir / "rgb" / name, o.width, o.height, rgb);
     write_png_gray16(dir / "depth" / name, depth);
+    write_png_gray16(dir / "labels" / name, labels);
     rgb_list += std::string(name, name + std::strlen(name) - 4) + " rgb/" + name + "\n";
     depth_list += std::string(name, name + std::strlen(name) - 4) + " depth/" + name + "\n";
     truth.push_back({timestamp, pose});
@@ -275,6 +362,12 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", stated, stated, cx, cy);
   write_text(dir / "intrinsics.txt", intrinsics);
   write_tum_trajectory(dir / "groundtruth.txt", truth);
+  write_text(dir / "labels" / "classes.json", R"({"classes": [
+  {"id": 1, "name": "wall"}, {"id": 2, "name": "floor"}, {"id": 3, "name": "ceiling"},
+  {"id": 4, "name": "ball"}, {"id": 5, "name": "cabinet"}, {"id": 6, "name": "person", "dynamic": true},
+  {"id": 7, "name": "chair"}, {"id": 8, "name": "crate"}
+]}
+)");
 }
 
 }  // namespace app

@@ -31,13 +31,17 @@ struct SyntheticOptions {
   // pixels, plus every pixel whose surface is seen at more than 80 degrees.
   double depth_noise = 0;
   double depth_holes = 0;
+  // Moving objects (for the arc path): a person walking across the view, a chair pushed a metre
+  // and left, a crate that appears (see Movers in the .cpp), with depth lost along their edges.
+  bool movers = false;
   uint32_t seed = 1;
   // A hard-motion preset: 2.2 rad/s peaks, 1/60 s exposure, Kinect noise, 5% holes.
   static SyntheticOptions hard_motion();
 };
 
 // Writes a synthetic RGB-D sequence in TUM layout (rgb/, depth/ as 16-bit PNG / 5000,
-// rgb.txt, depth.txt, groundtruth.txt and intrinsics.txt) with exact ground truth. The images
+// rgb.txt, depth.txt, groundtruth.txt and intrinsics.txt) with exact ground truth, and exact
+// per-pixel class ids in labels/ (16-bit PNG, same names) with labels/classes.json. The images
 // come from a ray caster of a textured room with spheres and boxes, independent of the splat
 // renderer, so reconstruction is never tested on its own image model. Deterministic.
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& options);

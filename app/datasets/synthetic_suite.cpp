@@ -41,6 +41,12 @@ std::vector<SyntheticCase> hard_case_suite() {
   o.shake_peak_rate = 0.5;
   o.depth_noise = 0.0015;
   add("long_two_laps", "700 frames, two laps, 0.5 rad/s, Kinect noise", o);
+
+  o = SyntheticOptions{};
+  o.frames = 150;
+  o.movers = true;
+  o.depth_noise = 0.0015;
+  add("moving_objects", "150 frames, a person walking across, a chair pushed 1 m, a crate appearing; Kinect noise", o);
   return suite;
 }
 

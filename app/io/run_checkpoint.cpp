@@ -102,7 +102,7 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
     const json& keyframe = f.at("keyframe");
     frames.push_back({keyframe.is_null() ? SlamSystem::kNoKeyframe : keyframe.get<std::size_t>(),
                       pose_from_json(f.at("T_keyframe_cam")), f.at("tracked").get<bool>(),
-                      f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>()});
+                      f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>(), {}});
   }
   return frames;
 }

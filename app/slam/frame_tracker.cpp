@@ -11,6 +11,21 @@
 
 namespace app {
 
+std::vector<uint8_t> upsample_labels(const std::vector<uint8_t>& labels, int labels_width, int factor, int width,
+                                     int height) {
+  std::vector<uint8_t> out(static_cast<std::size_t>(width) * height, 0);
+  if (labels.empty() || labels_width <= 0) return out;
+  const int labels_height = static_cast<int>(labels.size()) / labels_width;
+  for (int y = 0; y < height; ++y) {
+    const int ly = std::min(y / factor, labels_height - 1);
+    for (int x = 0; x < width; ++x) {
+      out[static_cast<std::size_t>(y) * width + x] =
+          labels[static_cast<std::size_t>(ly) * labels_width + std::min(x / factor, labels_width - 1)];
+    }
+  }
+  return out;
+}
+
 double residual_ratio(double scale, std::vector<double> recent) {
   if (recent.size() < 5) return 0;
   std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
@@ -102,25 +117,82 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   return r.converged;
 }
 
+std::shared_ptr<const tracking::OdometryFrame> FrameTracker::prepare(const splat::RgbdFrame& frame,
+                                                                   const std::vector<uint8_t>& labels) const {
+  if (labels.empty()) return std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
+  splat::RgbdFrame masked = frame;
+  masked.ignore = upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
+  return std::make_shared<const tracking::OdometryFrame>(masked, config_.odometry);
+}
+
 void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                   const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                                   FrameRecord& record) {
-  last_prepared_ = std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
-  const Eigen::Isometry3d guess = predict(frame.timestamp);
+  const bool detect = config_.moving.enabled;
+  moving_factor_ = tracking::OdometryFrame::factors(frame.width(), config_.odometry).back();
+  // The previous frame's moving regions, grown to where they may have gone, stay out of the
+  // first alignment: a large moving object could pull it off before its regions are found.
+  const std::vector<uint8_t> prior =
+      detect && !moving_.empty()
+          ? tracking::grow_regions(moving_, frame.width() / moving_factor_, frame.height() / moving_factor_,
+                                   config_.moving.prior_grow_px)
+          : std::vector<uint8_t>{};
+  last_prepared_ = prepare(frame, prior);
+  const bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
+  moving_.clear();
+  if (detect && tracked) leave_out_moving(frame, keyframe_pose, record);
+}
+
+void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
+                                    const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
+                                    FrameRecord& record) {
+  const auto reference = std::find_if(references_.begin(), references_.end(),
+                                      [&](const Reference& r) { return r.keyframe == record.reference; });
+  if (reference == references_.end()) return;
+  const Eigen::Isometry3d T_world_reference = keyframe_pose(reference->keyframe);
+  const Eigen::Isometry3d T_cur_ref = record.T_world_cam.inverse() * T_world_reference;
+  // Found on the frame as prepared without any regions left out: the prior's pixels are judged too.
+  const std::shared_ptr<const tracking::OdometryFrame> whole =
+      last_prepared_->levels().back().ignore.empty() ? last_prepared_ : prepare(frame, {});
+  std::vector<uint8_t> labels =
+      tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
+  const std::size_t moving = static_cast<std::size_t>(std::count_if(labels.begin(), labels.end(), [](uint8_t l) { return l != 0; }));
+  if (moving == 0) {
+    if (whole != last_prepared_) {  // the prior was left out for nothing: align the whole frame
+      last_prepared_ = whole;
+      FrameRecord again = record;
+      if (align(*reference, T_world_reference, record.T_world_cam, again)) record = again;
+    }
+    return;
+  }
+  record.moving_share = static_cast<double>(moving) / static_cast<double>(labels.size());
+  moving_ = std::move(labels);
+  last_prepared_ = prepare(frame, moving_);
+  FrameRecord again = record;
+  if (align(*reference, T_world_reference, record.T_world_cam, again)) {
+    again.retried = record.retried;
+    record = again;
+  }
+}
+
+bool FrameTracker::align_with_recovery(const Eigen::Isometry3d& guess,
+                                       const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
+                                       FrameRecord& record) {
   const Reference& newest = references_.front();
-  if (align(newest, keyframe_pose(newest.keyframe), guess, record)) return;
+  if (align(newest, keyframe_pose(newest.keyframe), guess, record)) return true;
   // Lost: from the last pose (no motion; unless that was the guess), then against the older
   // references.
   FrameRecord first_try = record;
   record.retried = true;
   const Eigen::Matrix4d& g = guess.matrix();
   const bool guess_was_last = std::equal(g.data(), g.data() + 16, last_poses_.back().matrix().data());
-  if (!guess_was_last && align(newest, keyframe_pose(newest.keyframe), last_poses_.back(), record)) return;
+  if (!guess_was_last && align(newest, keyframe_pose(newest.keyframe), last_poses_.back(), record)) return true;
   for (std::size_t k = 1; k < references_.size(); ++k) {
-    if (align(references_[k], keyframe_pose(references_[k].keyframe), last_poses_.back(), record)) return;
+    if (align(references_[k], keyframe_pose(references_[k].keyframe), last_poses_.back(), record)) return true;
   }
   record = first_try;  // nothing converged: report the first attempt
   record.retried = true;
+  return false;
 }
 
 void FrameTracker::refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record) {

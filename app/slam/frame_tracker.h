@@ -18,6 +18,7 @@
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
 #include "tracking/exposure_estimate.h"
+#include "tracking/moving_regions.h"
 #include "tracking/rgbd_odometry.h"
 
 namespace app {
@@ -35,6 +36,7 @@ struct FrameRecord {
   bool held_out = false;  // a test view: tracked, never mapped
   int renders = 0;      // rasterizer forward passes spent on tracking
   double overlap = 1;   // odometry: fraction of the reference's points this frame sees
+  double moving_share = 0;  // odometry: share of the frame's pixels found moving (left out)
   // Odometry: the reference keyframe the pose was measured against, and the information of that
   // measurement (tracking::OdometryResult::information), for the pose graph.
   static constexpr std::size_t kNoReference = static_cast<std::size_t>(-1);
@@ -49,6 +51,11 @@ struct FrameRecord {
 // sensor noise (1): a frame is lost above SlamConfig::lost_residual_factor. 0 while fewer than
 // five frames are recent.
 double residual_ratio(double scale, std::vector<double> recent);
+
+// Labels at 1/factor resolution (labels_width wide) spread over a width x height frame, each
+// pixel taking its block's (edge blocks extend over the remainder).
+std::vector<uint8_t> upsample_labels(const std::vector<uint8_t>& labels, int labels_width, int factor, int width,
+                                     int height);
 
 class FrameTracker {
  public:
@@ -68,6 +75,10 @@ class FrameTracker {
   // through the rasterizer against the map, from the odometry's estimate.
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
+  // The last tracked frame's moving regions (tracking::MovingLabel per pixel of the finest
+  // odometry level, moving_factor() times smaller than the frame), or empty: none found.
+  const std::vector<uint8_t>& moving_labels() const { return moving_; }
+  int moving_factor() const { return moving_factor_; }
   // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
   void relocalized(const FrameRecord& record);
   // The world moved under tracking (a loop closed): the motion model's poses move with it.
@@ -105,6 +116,16 @@ class FrameTracker {
              FrameRecord& record) const;
   void track_odometry(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                       FrameRecord& record);
+  // Aligns last_prepared_ against the newest reference from `guess`, then from the last pose and
+  // against the older references; false if none converged (record: the first attempt).
+  bool align_with_recovery(const Eigen::Isometry3d& guess,
+                           const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose, FrameRecord& record);
+  // Finds the moving regions of a tracked frame and aligns it again without them.
+  void leave_out_moving(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
+                        FrameRecord& record);
+  // The frame prepared for odometry with `labels` (finest level) ignored.
+  std::shared_ptr<const tracking::OdometryFrame> prepare(const splat::RgbdFrame& frame,
+                                                         const std::vector<uint8_t>& labels) const;
   void track_render(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
 
   splat::Rasterizer& rasterizer_;
@@ -120,6 +141,8 @@ class FrameTracker {
   std::deque<Reference> references_;
   std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
+  std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
+  int moving_factor_ = 1;
 };
 
 }  // namespace app

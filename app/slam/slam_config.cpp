@@ -40,6 +40,7 @@ void SlamConfig::validate() const {
   check.at_least("loop_closure.drift_floor_m", g.drift_floor_m, 0.0);
   check.at_least("loop_closure.drift_floor_deg", g.drift_floor_deg, 0.0);
   odometry.validate("odometry.");
+  moving.validate("moving.");
   tracking.validate("tracking.");
   mapping.validate("mapping.");
 }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "mapping/mapper.h"
+#include "tracking/moving_regions.h"
 #include "tracking/place_recognition.h"
 #include "tracking/pose_graph.h"
 #include "tracking/rgbd_odometry.h"
@@ -32,6 +33,9 @@ struct SlamConfig {
   // the map, `tracking`; hundreds of milliseconds a frame).
   std::string front_end = "odometry";
   tracking::OdometryConfig odometry;
+  // Odometry: moving objects found from the depth disagreeing with the reference keyframe, left
+  // out of tracking, of the map's seeds and of its losses.
+  tracking::MovingConfig moving;
   tracking::TrackingConfig tracking;
   mapping::MapperConfig mapping;
   // Odometry: a new keyframe's pose refined through the rasterizer with this many iterations

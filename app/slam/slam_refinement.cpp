@@ -43,7 +43,12 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   double cached_mib = 0;
   auto frame_at = [&](std::size_t i) -> const splat::RgbdFrame& {
     if (cache[i]) return *cache[i];
-    splat::RgbdFrame f = mapper_.refinement_frame(load(i));
+    splat::RgbdFrame loaded = load(i);
+    {
+      std::lock_guard lock(mutex_);
+      frames_[i].moving.apply(loaded);  // moving objects stay out of the map
+    }
+    splat::RgbdFrame f = mapper_.refinement_frame(loaded);
     const double mib = static_cast<double>((f.rgb.size() + f.depth.size()) * sizeof(float)) / (1 << 20);
     if (cached_mib + mib > config_.refine_cache_mib) return uncached = std::move(f);
     cached_mib += mib;

@@ -251,7 +251,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
                              : "waiting for a first frame with depth: " + std::to_string(100 * measured) +
                                    "% of its pixels are measured";
     std::lock_guard lock(mutex_);
-    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false, held_out});
+    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false, held_out, {}});
     record.gaussians = 0;
     return record;
   }
@@ -288,11 +288,17 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
       tracker_.refine_keyframe(map, frame, record);
     }
   }
+  // What mapping leaves out of this frame: where moving objects stand.
+  const MovingMask moving = record.moving_share > 0 ? MovingMask::arrivals(tracker_.moving_labels(),
+                                                                           frame.width() / tracker_.moving_factor(),
+                                                                           tracker_.moving_factor())
+                                                    : MovingMask{};
   std::optional<KeyframeJob> job;
   {
     std::lock_guard lock(mutex_);
     if (record.keyframe) {
       job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size()};
+      moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
         tracking::PoseGraphEdge edge;
@@ -332,7 +338,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
   // Relative to the keyframe as known now (sequential: after mapping moved it).
   frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
-                     record.tracked, record.keyframe, held_out});
+                     record.tracked, record.keyframe, held_out, moving});
   record.held_out = held_out;
   record.gaussians = map_->size();
   return record;

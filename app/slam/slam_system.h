@@ -25,6 +25,7 @@
 
 #include "mapping/mapper.h"
 #include "slam/frame_tracker.h"
+#include "slam/moving_mask.h"
 #include "slam/slam_config.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
@@ -118,6 +119,7 @@ class SlamSystem {
     Eigen::Isometry3d T_keyframe_cam;
     bool tracked, is_keyframe;
     bool held_out = false;
+    MovingMask moving;  // left out of mapping (not kept in checkpoints)
   };
   // Everything the system carries from one frame to the next, for checkpoints; the keyframes'
   // images excepted, which restore() loads again.

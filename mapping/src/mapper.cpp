@@ -69,6 +69,11 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
       mask[p] = uncovered || in_front ? 1.f : 0.f;
     }
   }
+  if (!f.ignore.empty()) {
+    for (std::size_t p = 0; p < mask.size(); ++p) {
+      if (f.ignore[p]) mask[p] = 0.f;
+    }
+  }
   splat::RgbdFrame filled;
   if (fill_holes) {
     filled = f;
@@ -150,9 +155,22 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
     vignetting_.apply(recorded, f.camera);
   }
   const std::vector<float>& colour = vignetted ? recorded : render.rgb;
-  double loss = splat::l1_loss<float>(colour, f.rgb, 3, {}, d.rgb, config_.color_weight);
+  // Ignored pixels (moving objects) take the render's own values as targets: they pull nowhere.
+  std::vector<float> ignoring_rgb, ignoring_depth;
+  if (!f.ignore.empty()) {
+    ignoring_rgb = f.rgb;
+    ignoring_depth = f.depth;
+    for (std::size_t p = 0; p < f.ignore.size(); ++p) {
+      if (!f.ignore[p]) continue;
+      for (int c = 0; c < 3; ++c) ignoring_rgb[p * 3 + c] = colour[p * 3 + c];
+      ignoring_depth[p] = 0;  // no measurement
+    }
+  }
+  const std::vector<float>& target_rgb = f.ignore.empty() ? f.rgb : ignoring_rgb;
+  const std::vector<float>& target_depth = f.ignore.empty() ? f.depth : ignoring_depth;
+  double loss = splat::l1_loss<float>(colour, target_rgb, 3, {}, d.rgb, config_.color_weight);
   if (config_.ssim_weight > 0) {
-    loss += splat::dssim_loss<float>(colour, f.rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
+    loss += splat::dssim_loss<float>(colour, target_rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
   if (vignetted) {
     const std::array<double, 2> d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);
@@ -160,7 +178,7 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   }
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
-  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, f.depth, threshold, d.depth, d.alpha,
+  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, target_depth, threshold, d.depth, d.alpha,
                                                  step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame

@@ -68,6 +68,7 @@ void select_points(OdometryFrame::Level& l, const OdometryConfig& c) {
       const int i = y * l.width + x;
       const float z = l.depth[i];
       if (!(z >= c.min_depth && z <= c.max_depth)) continue;
+      if (!l.ignore.empty() && l.ignore[i]) continue;
       // Not at a depth edge or next to a hole: there the depth is mixed or missing, colour and
       // depth disagree most (unregistered sensors, shadows), and the depth residual is ill-defined.
       const float slope = std::sqrt(l.depth_dx[i] * l.depth_dx[i] + l.depth_dy[i] * l.depth_dy[i]) / z;
@@ -168,6 +169,9 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
     const float inv_z = 1.f / p.z();
     const float x = fx * p.x() * inv_z + cx, y = fy * p.y() * inv_z + cy;
     if (!(x >= 0 && y >= 0 && x < static_cast<float>(cur.width - 1) && y < static_cast<float>(cur.height - 1))) continue;
+    if (!cur.ignore.empty() && cur.ignore[static_cast<std::size_t>(y + 0.5f) * cur.width + static_cast<std::size_t>(x + 0.5f)]) {
+      continue;
+    }
     const Sample s = sample(cur, x, y);
     // d(pixel)/d(p) and d(p)/d(xi) = [I | -[p]x] for the left perturbation.
     const float dux_dx = fx * inv_z, dux_dz = -fx * p.x() * inv_z * inv_z;
@@ -232,7 +236,7 @@ std::vector<int> OdometryFrame::factors(int width, const OdometryConfig& config)
 OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config) : timestamp_(frame.timestamp) {
   config.validate();
   const std::size_t pixels = static_cast<std::size_t>(frame.width()) * frame.height();
-  if (frame.rgb.size() != pixels * 3 || frame.depth.size() != pixels) {
+  if (frame.rgb.size() != pixels * 3 || frame.depth.size() != pixels || (!frame.ignore.empty() && frame.ignore.size() != pixels)) {
     throw splat::Error("OdometryFrame: frame images do not match its " + std::to_string(frame.width()) + "x" +
                        std::to_string(frame.height()) + " camera");
   }
@@ -267,6 +271,7 @@ OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig
     l.intensity_dx.assign(gx.ptr<float>(), gx.ptr<float>() + gx.total());
     l.intensity_dy.assign(gy.ptr<float>(), gy.ptr<float>() + gy.total());
     l.depth = scaled.depth;
+    l.ignore = scaled.ignore;
     depth_gradients(l);
     select_points(l, config);
     finest_first.push_back(std::move(l));

@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "splat/camera.h"
@@ -13,12 +14,15 @@ struct RgbdFrame {
   Camera camera;
   std::vector<float> rgb;    // [H, W, 3]
   std::vector<float> depth;  // [H, W]
+  // [H, W] or empty (none): non-zero where the pixel shows no part of the static scene (a moving
+  // object), left out of tracking and mapping.
+  std::vector<uint8_t> ignore;
   int width() const { return camera.width; }
   int height() const { return camera.height; }
 };
 
 // The frame at 1/factor resolution: colour averaged over each block, depth averaged over its
-// valid pixels (0 if none), intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
+// valid pixels (0 if none), a block ignored if any of its pixels is, intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
 // round down.
 RgbdFrame downsample(const RgbdFrame& frame, int factor);
 

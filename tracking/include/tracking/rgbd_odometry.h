@@ -67,6 +67,9 @@ class OdometryFrame {
     double fx = 0, fy = 0, cx = 0, cy = 0;  // pixel centres at +0.5 as splat::Camera
     std::vector<float> intensity, depth;    // [H, W]
     std::vector<float> intensity_dx, intensity_dy, depth_dx, depth_dy;  // per pixel
+    // The frame's ignored pixels (splat::RgbdFrame::ignore) at this level, or empty: no point is
+    // taken there, and no residual where a reference point lands there.
+    std::vector<uint8_t> ignore;
     // The selected points of this level when the frame is a reference: pixel index and its
     // 3D position in the camera.
     std::vector<int> points;

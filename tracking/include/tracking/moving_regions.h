@@ -1,0 +1,53 @@
+// Moving objects found without a model: after a frame is aligned to its reference keyframe, the
+// reference's surfaces are warped into the frame, and where the frame's depth disagrees with them
+// by more than the sensor's noise over a whole region, something moved. Such regions are left
+// out of tracking (the frame is then aligned again) and of mapping.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "tracking/rgbd_odometry.h"
+
+namespace tracking {
+
+struct MovingConfig {
+  bool enabled = true;
+  // A pixel has changed where its depth lies in front of (or behind) every reference surface
+  // warped into its 3x3 neighbourhood by more than min_change + noise_sigmas x the sensor
+  // noise (OdometryConfig::depth_noise z^2): the neighbourhood keeps depth edges from counting.
+  double min_change = 0.05;  // metres
+  double noise_sigmas = 6;
+  // Changed regions (4-connected) smaller than this share of the image are noise, unless they
+  // overlap the previous frame's regions, where half of it is enough.
+  double min_region = 0.004;
+  // Kept regions grow by this many pixels at the finest odometry level (object outlines have
+  // mixed depth).
+  int grow_px = 2;
+  // The previous frame's regions, grown by this many pixels, are left out of the first
+  // alignment of the next frame, before its own are found.
+  int prior_grow_px = 6;
+  void validate(const std::string& prefix = "MovingConfig.") const;
+};
+
+// Per pixel of the finest odometry level.
+enum MovingLabel : uint8_t {
+  kStaticPixel = 0,
+  kArrived = 1,  // something stands in front of the static scene: a moving object here now
+  kLeft = 2,     // the scene is seen behind where the reference saw a surface: an object left
+};
+
+// The labels of `current`'s finest level ([H, W]) given its pose relative to `reference`.
+// `previous`: the last frame's labels (same size) or empty. Reference pixels that the reference
+// itself ignores are not warped.
+std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const OdometryFrame& current,
+                                    const Eigen::Isometry3d& T_cur_ref, const OdometryConfig& odometry,
+                                    const MovingConfig& config, std::span<const uint8_t> previous = {});
+
+// `labels` grown by `pixels` (any label becomes kArrived where it spreads; a pixel keeps its own).
+std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, int height, int pixels);
+
+}  // namespace tracking
