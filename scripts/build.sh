@@ -13,10 +13,11 @@ while [ $# -gt 0 ]; do
     *) extra+=("$1"); shift ;;
   esac
 done
-# CI: warnings fail the build, and Vulkan and Slurm tests fail (not skip) without a device or a
-# test cluster (CI runs as root after scripts/install_deps.sh).
+# CI: warnings fail the build, and Vulkan, Slurm and ROS recording tests fail (not skip) without a
+# device, a test cluster, or ROS 1 and the MCAP writer (CI runs as root after scripts/install_deps.sh).
 if [ "${CI:-}" = "true" ]; then
-  extra+=(-DGSLAM_WARNINGS_AS_ERRORS=ON -DGSLAM_REQUIRE_GPU_TESTS=ON -DGSLAM_REQUIRE_SLURM_TESTS=ON)
+  extra+=(-DGSLAM_WARNINGS_AS_ERRORS=ON -DGSLAM_REQUIRE_GPU_TESTS=ON -DGSLAM_REQUIRE_SLURM_TESTS=ON
+              -DGSLAM_REQUIRE_ROS_TESTS=ON)
 fi
 cmake -S . -B "${GSLAM_BUILD_DIR:-build}" -G Ninja -DCMAKE_BUILD_TYPE=Release "${extra[@]}"
 cmake --build "${GSLAM_BUILD_DIR:-build}" --parallel "${targets[@]}"

@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages gslam builds with, skipping those already present. slurm-wlm
 # and munge serve the --slurm tests, which start their own daemons; this script starts no service.
+# The ROS 1 packages (Debian's Noetic-era rosbag, sensor_msgs; rosbag/bag.h needs the include
+# folders of pluginlib, class_loader, rcpputils, rcutils, ament_index_cpp) let gslam read .bag
+# files and the tests write them; gslam builds without them. zstd and lz4 decompress MCAP chunks.
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
@@ -11,6 +14,9 @@ packages=(
   clang libclang-rt-14-dev
   ffmpeg
   slurm-wlm munge
+  libzstd-dev liblz4-dev lz4
+  librosbag-dev libroscpp-dev libsensor-msgs-dev libtf2-msgs-dev libroslz4-dev
+  pluginlib-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -34,4 +40,16 @@ if ! grep -qs "\"version\": \"$validator_version\"" "$validator_dir/node_modules
   echo "install: gltf-validator@$validator_version into $validator_dir"
   mkdir -p "$validator_dir"
   npm install --prefix "$validator_dir" --no-audit --no-fund --silent "gltf-validator@$validator_version"
+fi
+# The MCAP project's reference writer with ROS 2 CDR serialization (tests/interop/write_mcap.mjs
+# writes the test MCAP files with them; its lz4 chunks come from the lz4 command), the message
+# definition parser and the zstd chunk compressor, pinned, beside the validator.
+mcap_packages=(@mcap/core@2.2.2 @foxglove/rosmsg2-serialization@3.1.0 @foxglove/rosmsg@5.0.5
+               @foxglove/wasm-zstd@1.0.1)
+if ! grep -qs '"version": "2.2.2"' "$validator_dir/node_modules/@mcap/core/package.json" ||
+   ! grep -qs '"version": "1.0.1"' "$validator_dir/node_modules/@foxglove/wasm-zstd/package.json"; then
+  echo "install: ${mcap_packages[*]} into $validator_dir"
+  mkdir -p "$validator_dir"
+  npm install --prefix "$validator_dir" --no-audit --no-fund --silent "gltf-validator@$validator_version" \
+    "${mcap_packages[@]}"
 fi

@@ -56,6 +56,12 @@ void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->check(CLI::Range(0, 256))->capture_default_str();
 }
 
+// A ROS recording's topics (found by message type unless named).
+void add_topic_options(CLI::App& cmd, DatasetOptions& o) {
+  cmd.add_option("--color-topic", o.color_topic, "ROS recording: the colour image topic (default: found by type)");
+  cmd.add_option("--depth-topic", o.depth_topic, "ROS recording: the depth image topic (default: found by type)");
+}
+
 // The options benchmark and batch share: the settings of every run, and where the runs go.
 void add_sequence_run_options(CLI::App& cmd, BenchmarkOptions& o) {
   cmd.add_option("--config", o.config, "JSON file with SLAM settings, the same for every sequence");
@@ -160,7 +166,8 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("dataset", recon.dataset,
                         "Sequence folder: TUM RGB-D (rgb.txt, depth.txt), the plain folder (the same lists + "
                         "intrinsics.txt), images (rgb/, depth/, intrinsics.txt) or Replica (results/, traj.txt); "
-                        "docs/guide.md shows each; default: the bundled synthetic sequence");
+                        "or a ROS recording RUN.bag / RUN.mcap; docs/guide.md shows each; default: the bundled "
+                        "synthetic sequence");
   recon_cmd->add_option("--out", recon.out, "Output directory (required unless --print-config)");
   recon_cmd->add_flag("--overwrite", recon.overwrite, "Replace the outputs of another run in --out");
   recon_cmd->add_flag("--resume", recon.resume, "Continue the interrupted run in --out from its checkpoint");
@@ -168,6 +175,7 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
+  add_topic_options(*recon_cmd, recon.dataset_options);
   recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
   recon_cmd->add_option("--test-every", recon.test_every,
                         "Hold out every N-th frame as a test view: tracked, never mapped (gslam eval scores them apart)")
@@ -180,6 +188,7 @@ int run_cli(int argc, char** argv) {
   eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth; default: the one its summary.json names)");
   eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
+  add_topic_options(*eval_cmd, eval.dataset_options);
   eval_cmd->add_flag("--sim3", eval.sim3, "Align with scale (similarity) instead of rigidly");
   eval_cmd->add_option("--every", eval.every, "Measure rendering quality on every N-th frame")->capture_default_str();
   add_backend_options(*eval_cmd, eval.backend);
@@ -203,6 +212,7 @@ int run_cli(int argc, char** argv) {
                        "--watch, stop after N frames are tracked");
   live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
   live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
+  add_topic_options(*live_cmd, live.dataset_options);
   live_cmd->add_option("--idle-timeout", live.watch_options.idle_timeout, "--watch: seconds without frames that end the stream")->capture_default_str();
   live_cmd->add_option("--checkpoint-seconds", live.checkpoint_seconds, "Rewrite the outputs this often")->capture_default_str();
   live_cmd->add_option("--config", live.config, "JSON file with SLAM settings");

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "datasets/bag_dataset.h"
+#include "datasets/bag_reader.h"
 #include "io/file_error.h"
 #include "io/image_io.h"
 #include "io/trajectory.h"
@@ -72,10 +74,9 @@ void read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path)
   cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
 }
 
-// Optional ROOT/groundtruth.txt (TUM trajectory) associated with d.entries by timestamp within
-// 0.02 s, as TUM's tools do. A file matching no frame (another clock) is a warning.
-void attach_ground_truth(Dataset& d) {
-  const std::filesystem::path path = d.root / "groundtruth.txt";
+// Optional `path` (ROOT/groundtruth.txt, a TUM trajectory) associated with d.entries by timestamp
+// within 0.02 s, as TUM's tools do. A file matching no frame (another clock) is a warning.
+void attach_ground_truth(Dataset& d, const std::filesystem::path& path) {
   if (!std::filesystem::exists(path)) return;
   const std::vector<StampedPose> truth = read_tum_trajectory(path);
   std::vector<double> truth_t, frame_t;
@@ -135,7 +136,7 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   for (const auto& [i, j] : pairs) {
     d.entries.push_back({rgb[i].timestamp, root / rgb[i].file, root / depth[j].file, std::nullopt});
   }
-  attach_ground_truth(d);
+  attach_ground_truth(d, root / "groundtruth.txt");
   return d;
 }
 
@@ -301,7 +302,7 @@ Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder
                          std::to_string(d.listed) +
                          " colour images in rgb/ have no depth image of the same name");
   }
-  attach_ground_truth(d);
+  attach_ground_truth(d, root / "groundtruth.txt");
   return d;
 }
 
@@ -375,7 +376,7 @@ std::string unused_frames(const Dataset& d) {
     if (n > 0) out += (out.empty() ? "" : ", ") + std::to_string(n) + why;
   };
   add(d.missing_colour, " have no colour image here");
-  add(d.unmatched, d.format == "tum" ? " no depth within 0.02 s" : " no depth image");
+  add(d.unmatched, d.format == "tum" || d.store ? " no depth within 0.02 s" : " no depth image");
   add(d.beyond_max_frames, " beyond --max-frames");
   return out;
 }
@@ -394,6 +395,11 @@ bool Dataset::has_ground_truth() const {
 
 splat::RgbdFrame Dataset::load(std::size_t i) const {
   const DatasetEntry& e = entries.at(i);
+  if (store) {
+    splat::RgbdFrame f = store->load(i, intrinsics, depth_scale);
+    f.timestamp = e.timestamp;
+    return f;
+  }
   const splat::Image8 rgb = read_rgb8(e.rgb);
   if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
     fail(e.rgb, "image is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) + ", expected " +
@@ -423,9 +429,18 @@ splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::p
 }
 
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options) {
-  if (!std::filesystem::is_directory(root)) fail(root, "dataset folder does not exist");
+  const bool recording = is_bag_file(root);
+  if (recording && !std::filesystem::is_regular_file(root)) fail(root, "recording does not exist");
+  if (!recording && !std::filesystem::is_directory(root)) fail(root, "dataset folder does not exist");
+  if (!recording && (!options.color_topic.empty() || !options.depth_topic.empty())) {
+    fail(root, "--color-topic and --depth-topic are for ROS recordings (.bag, .mcap), not a folder");
+  }
   Dataset d;
-  if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
+  if (recording) {
+    d = open_bag(root, options);
+    if (!options.intrinsics.empty()) apply_intrinsics(d.intrinsics, options.intrinsics);
+    attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
+  } else if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
     d = open_tum(root, options);
   } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {
     d = open_replica(root, options);
@@ -440,7 +455,8 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
                    "--intrinsics), the plain folder (the same lists + intrinsics.txt 'fx fy cx "
                    "cy'), a folder of images (rgb/NAME.png|jpg + depth/NAME.png paired by name, "
                    "NAME the timestamp in seconds, + intrinsics.txt), Replica "
-                   "(results/frameNNNNNN.jpg + results/depthNNNNNN.png + traj.txt); see "
+                   "(results/frameNNNNNN.jpg + results/depthNNNNNN.png + traj.txt), a ROS "
+                   "recording (RUN.bag, RUN.mcap); see "
                    "docs/guide.md");
   }
   if (d.entries.empty()) {
@@ -453,7 +469,7 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
     d.beyond_max_frames = d.entries.size() - static_cast<std::size_t>(options.max_frames);
     d.entries.resize(static_cast<std::size_t>(options.max_frames));
   }
-  set_size_from(d.intrinsics, d.entries.front().rgb);
+  if (!d.store) set_size_from(d.intrinsics, d.entries.front().rgb);
   return d;
 }
 

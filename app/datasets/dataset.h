@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@ struct DatasetOptions {
   std::string intrinsics;   // "fx,fy,cx,cy" overrides the preset (image size from the files)
   double depth_scale = 0;   // stored value per metre; 0 = the format's default
   int max_frames = 0;       // 0 = all
+  std::string color_topic;  // ROS recordings: the colour and depth image topics (default: found
+  std::string depth_topic;  // by message type and encoding, datasets/bag_dataset.h)
 };
 
 struct DatasetEntry {
@@ -22,13 +25,25 @@ struct DatasetEntry {
   std::optional<Eigen::Isometry3d> T_world_cam_truth;  // ground truth, camera to world
 };
 
+// Frames kept inside one file (a ROS bag, an MCAP file) rather than as image files: entry i of a
+// Dataset with a store is the store's frame i.
+class FrameStore {
+ public:
+  virtual ~FrameStore() = default;
+  // Frame i: colour [H, W, 3] / 255, depth [H, W] in metres (stored value / depth_scale), camera
+  // `intrinsics`; the timestamp is left to Dataset::load. Safe to call from several threads.
+  // Throws splat::Error naming the file and the message for unreadable or mis-sized images.
+  virtual splat::RgbdFrame load(std::size_t i, const splat::Camera& intrinsics, double depth_scale) const = 0;
+};
+
 // An RGB-D sequence on disk: entries in time order, loaded one frame at a time.
 struct Dataset {
-  std::string format;  // "tum" (the plain folder too), "images", "replica"; "watched" for live --watch
-  std::filesystem::path root;
+  std::string format;  // "tum" (the plain folder too), "images", "replica", "rosbag", "mcap"; "watched" for live --watch
+  std::filesystem::path root;  // the folder, or the recording file
   splat::Camera intrinsics; // pose unused
   double depth_scale = 5000;
-  std::vector<DatasetEntry> entries;
+  std::vector<DatasetEntry> entries;  // in a recording, rgb and depth both name the file
+  std::shared_ptr<const FrameStore> store;  // set for recordings: their frames' pixels
   // Where the listed frames went: listed = entries.size() + missing_colour + unmatched +
   // beyond_max_frames. A folder holding part of a sequence (lists for all of it, images for some)
   // is normal and not a warning.
@@ -46,8 +61,8 @@ struct Dataset {
   // or "193 frames" when every listed frame is used.
   std::string frames_used() const;
 
-  // Reads entry i (colour /255, depth / depth_scale). Throws splat::Error naming the file for
-  // unreadable images or a size that does not match the intrinsics.
+  // Reads entry i (colour /255, depth / depth_scale), from its files or from `store`. Throws
+  // splat::Error naming the file for unreadable images or a size that does not match the intrinsics.
   splat::RgbdFrame load(std::size_t i) const;
   bool has_ground_truth() const;
 };
@@ -64,7 +79,9 @@ splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::p
 // seconds and ordered as numbers, otherwise frames are in name order stamped index / 30 s), or
 // Replica as used by NICE-SLAM/SplaTAM (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5,
 // traj.txt). An unknown camera without --intrinsics is an error, never a guess. A folder that
-// matches no layout is an error naming every layout and what the folder lacks.
+// matches no layout is an error naming every layout and what the folder lacks. A file ending in
+// .bag (ROS 1) or .mcap (ROS 2's default) is a recording: open_bag() (datasets/bag_dataset.h)
+// reads it, with ground truth from groundtruth.txt beside it.
 // An image file's stem as its timestamp in seconds ("1341841873.273798", "-2", "1e3"), if all
 // of it is one finite number. The images layout and `live --watch` stamp frames alike: by this,
 // else at 30 Hz by index.
