@@ -13,7 +13,7 @@ mkdir -p "$build"
 CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGSLAM_BUILD_FUZZERS=ON \
   -DGSLAM_SANITIZE=address,undefined -DGSLAM_ENABLE_VULKAN=OFF -DGSLAM_BUILD_TESTS=ON \
   -DGSLAM_BUILD_BENCHMARKS=OFF > "$build/configure.log"
-targets=(ply gltf image trajectory dataset config safetensors checkpoint)
+targets=(ply gltf image trajectory dataset config safetensors checkpoint mcap)
 cmake --build "$build" --target "${targets[@]/#/fuzz_}"
 
 seed() {  # seed TARGET FILE [PREFIX_BYTE]: copies FILE (its first 64 KiB) into the corpus
@@ -54,7 +54,24 @@ length=${#header}
 { printf 'gslam checkpoint 1\n'; printf "\\x$(printf %02x $((length & 255)))\\x$(printf %02x $((length >> 8)))"
   head -c 6 /dev/zero; printf '%s' "$header"; head -c 136 /dev/zero; } > "$build/made/checkpoint.bin"
 seed checkpoint "$build/made/checkpoint.bin"
-
+# Small MCAP files (a 4x3 frame, chunks uncompressed, zstd, lz4) from the MCAP reference writer,
+# where Node and its packages are installed (scripts/install_deps.sh).
+tools=${GSLAM_TOOLS_DIR:-$HOME/.cache/gslam/tools}
+if command -v node > /dev/null && [ -d "$tools/node_modules/@mcap/core" ]; then
+  mkdir -p "$build/made/mcap"
+  head -c 36 /dev/zero | tr '\0' '\200' > "$build/made/mcap/colour"
+  head -c 24 /dev/zero | tr '\0' '\010' > "$build/made/mcap/depth"
+  for compression in "" zstd lz4; do
+    printf '{"compression": "%s", "width": 4, "height": 3, "k": [5, 0, 2, 0, 5, 1.5, 0, 0, 1],
+      "colour_topic": "/rgb/image", "colour_encoding": "rgb8", "depth_topic": "/depth/image",
+      "depth_encoding": "16UC1", "info_topic": "/rgb/camera_info", "frames": [
+      {"colour": "colour", "colour_stamp": [10, 0], "depth": "depth", "depth_stamp": [10, 5000000]},
+      {"colour": "colour", "colour_stamp": [10, 33000000], "depth": "depth", "depth_stamp": [10, 34000000]}]}' \
+      "$compression" > "$build/made/mcap/manifest.json"
+    node tests/interop/write_mcap.mjs "$tools" "$build/made/mcap/manifest.json" "$build/made/frames_${compression:-none}.mcap"
+    seed mcap "$build/made/frames_${compression:-none}.mcap"
+  done
+fi
 mkdir -p "$build/findings"
 echo "| target | seconds | executions | executions/s | result |"
 echo "|---|---|---|---|---|"

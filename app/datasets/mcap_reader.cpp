@@ -249,12 +249,17 @@ class McapReader final : public BagReader {
 
   RosImage read_image(const std::string& topic, std::size_t k) const override {
     const Indexed& m = images_.at(topic).at(k);
-    const std::vector<std::uint8_t> bytes = message_bytes(m);
-    try {
-      return parse_image(bytes, m.ros1, m.kind, true, bytes.size());
-    } catch (const Malformed& e) {
-      fail(path_, "message " + std::to_string(k) + " on " + topic + ": " + e.what);
-    }
+    const auto parse = [&](std::span<const std::uint8_t> bytes) {
+      try {
+        return parse_image(bytes, m.ros1, m.kind, true, bytes.size());
+      } catch (const Malformed& e) {
+        fail(path_, "message " + std::to_string(k) + " on " + topic + ": " + e.what);
+      }
+    };
+    if (m.chunk == kNoChunk) return parse(file_.read(m.offset, m.length));
+    // Parsed in place: the pixels are copied once, out of the chunk.
+    std::lock_guard lock(chunk_mutex_);
+    return parse(chunk_message(m));
   }
 
   std::optional<RosCameraInfo> camera_info(const std::string& topic) const override {
@@ -479,11 +484,11 @@ class McapReader final : public BagReader {
     }
   }
 
-  std::vector<std::uint8_t> message_bytes(const Indexed& m) const {
-    if (m.chunk == kNoChunk) return file_.read(m.offset, m.length);
-    std::lock_guard lock(chunk_mutex_);
+  // The data of a message in a chunk, inside the cached chunk (decompressed now unless it is the
+  // last one read). Called with chunk_mutex_ held; valid while it is.
+  std::span<const std::uint8_t> chunk_message(const Indexed& m) const {
     if (cached_chunk_ != m.chunk) {
-      cached_.clear();
+      std::vector<std::uint8_t>().swap(cached_);  // freed before the next one is allocated
       cached_chunk_ = kNoChunk;
       const std::vector<std::uint8_t> head = file_.read(m.chunk - 9, 9);
       std::uint64_t length;
@@ -496,8 +501,8 @@ class McapReader final : public BagReader {
       cached_chunk_ = m.chunk;
     }
     if (m.offset > cached_.size() || m.length > cached_.size() - m.offset) malformed(m.chunk - 9, "chunk changed since it was indexed");
-    return {cached_.begin() + static_cast<std::ptrdiff_t>(m.offset),
-            cached_.begin() + static_cast<std::ptrdiff_t>(m.offset + m.length)};
+    return std::span<const std::uint8_t>(cached_).subspan(static_cast<std::size_t>(m.offset),
+                                                          static_cast<std::size_t>(m.length));
   }
 
   std::filesystem::path path_;

@@ -8,9 +8,10 @@
 
 namespace app {
 
-// A chunk decompresses into memory whole: larger ones are refused before anything is allocated
-// (rosbag2 writes chunks of about 1 MiB; one image of 16384 x 16384 RGBA is 1 GiB).
-inline constexpr std::uint64_t kMaxMcapChunkBytes = std::uint64_t(1) << 30;
+// A chunk decompresses into memory whole: larger ones are refused before anything is allocated.
+// rosbag2 writes chunks of about 1 MiB, a larger message alone in its chunk; the largest image
+// gslam reads (image_size_allowed: 2^26 pixels, 4 bytes each as rgba8 or 32FC1) is 256 MiB.
+inline constexpr std::uint64_t kMaxMcapChunkBytes = (std::uint64_t(256) + 16) << 20;
 // Schema, channel and CameraInfo records are read whole; they are a few KiB.
 inline constexpr std::uint64_t kMaxMcapSmallRecordBytes = std::uint64_t(16) << 20;
 
