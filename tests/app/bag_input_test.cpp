@@ -189,6 +189,19 @@ void expect_same_reconstruction(const std::filesystem::path& recording, const Te
   std::printf("bag vs folder trajectory: largest position difference %.3g m over %d frames\n", difference, kFrames);
   const auto eval = run_gslam("eval " + (dir / "bag_run").string() + " --backend cpu --every 10");
   EXPECT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("ATE"), std::string::npos) << eval.output;
+}
+
+// `gslam live` replays the recording (every frame, no clock, so the test does not depend on
+// the machine's speed) and writes a run that eval takes.
+void expect_live_replay(const std::filesystem::path& recording, const TempDir& dir) {
+  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
+  const auto live = run_gslam("live " + recording.string() + " --headless --every-frame --max-frames 8 --backend cpu --out " +
+                              (dir / "live_run").string() + " --config " + (dir / "quick.json").string());
+  ASSERT_EQ(live.exit_code, 0) << live.output;
+  EXPECT_EQ(app::read_tum_trajectory(dir / "live_run" / "trajectory.txt").size(), 8u) << live.output;
+  const auto eval = run_gslam("eval " + (dir / "live_run").string() + " --backend cpu --every 10");
+  EXPECT_EQ(eval.exit_code, 0) << eval.output;
 }
 
 class McapInput : public ::testing::Test {
@@ -217,6 +230,7 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   EXPECT_TRUE(bag.has_ground_truth());
   expect_same_frames(folder, bag, kFrames);
   expect_same_reconstruction(mcap, dir);
+  expect_live_replay(mcap, dir);
 }
 
 TEST_F(McapInput, Lz4ChunksAnd16BitDepth) {
