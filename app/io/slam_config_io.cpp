@@ -1,5 +1,6 @@
 #include "io/slam_config_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -190,7 +191,8 @@ void read_field(const Field& f, const nlohmann::json& v) {
 
 void read_section(const nlohmann::json& object, const std::string& section, const std::vector<Field>& table) {
   for (const auto& [key, value] : object.items()) {
-    if (section.empty() && (key == "odometry" || key == "tracking" || key == "mapping" || key == "loop_closure")) {
+    const bool is_section = std::any_of(table.begin(), table.end(), [&](const Field& f) { return f.section == key; });
+    if (section.empty() && is_section) {
       if (!value.is_object()) type_error(key, "an object of settings", value);
       read_section(value, key, table);
       continue;

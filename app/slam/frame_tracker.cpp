@@ -122,6 +122,8 @@ std::shared_ptr<const tracking::OdometryFrame> FrameTracker::prepare(const splat
   if (labels.empty()) return std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
   splat::RgbdFrame masked = frame;
   masked.ignore = upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
+  // Where an object left, the frame shows the static scene: only where one stands is ignored.
+  for (uint8_t& i : masked.ignore) i = i == tracking::kArrived;
   return std::make_shared<const tracking::OdometryFrame>(masked, config_.odometry);
 }
 
@@ -156,7 +158,7 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
       last_prepared_->levels().back().ignore.empty() ? last_prepared_ : prepare(frame, {});
   std::vector<uint8_t> labels =
       tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
-  const std::size_t moving = static_cast<std::size_t>(std::count_if(labels.begin(), labels.end(), [](uint8_t l) { return l != 0; }));
+  const auto moving = static_cast<std::size_t>(std::count(labels.begin(), labels.end(), tracking::kArrived));
   if (moving == 0) {
     if (whole != last_prepared_) {  // the prior was left out for nothing: align the whole frame
       last_prepared_ = whole;

@@ -21,8 +21,9 @@ struct MovingConfig {
   // noise (OdometryConfig::depth_noise z^2): the neighbourhood keeps depth edges from counting.
   double min_change = 0.05;  // metres
   double noise_sigmas = 6;
-  // Changed regions (4-connected) smaller than this share of the image are noise, unless they
-  // overlap the previous frame's regions, where half of it is enough.
+  // Regions (4-connected) with fewer changed pixels than this share of the image are noise, or
+  // have stopped moving; half of it is enough for a region that continues one (the previous
+  // frame's, or a moving surface of the reference).
   double min_region = 0.004;
   // Kept regions grow by this many pixels at the finest odometry level (object outlines have
   // mixed depth).
@@ -41,8 +42,9 @@ enum MovingLabel : uint8_t {
 };
 
 // The labels of `current`'s finest level ([H, W]) given its pose relative to `reference`.
-// `previous`: the last frame's labels (same size) or empty. Reference pixels that the reference
-// itself ignores are not warped.
+// `previous`: the last frame's labels (same size) or empty. Surfaces the reference itself ignores
+// are moving ones: a pixel at or in front of one continues its region (kArrived), which is kept
+// as long as enough of it keeps changing against the static surfaces (the object still moves).
 std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const OdometryFrame& current,
                                     const Eigen::Isometry3d& T_cur_ref, const OdometryConfig& odometry,
                                     const MovingConfig& config, std::span<const uint8_t> previous = {});
