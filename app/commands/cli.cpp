@@ -56,10 +56,12 @@ void add_backend_options(CLI::App& cmd, BackendChoice& choice) {
   cmd.add_option("--threads", choice.threads, "CPU threads (0 = all)")->check(CLI::Range(0, 256))->capture_default_str();
 }
 
-// A ROS recording's topics (found by message type unless named).
+// A ROS recording's topics (found by message type unless named) and ground truth.
 void add_topic_options(CLI::App& cmd, DatasetOptions& o) {
   cmd.add_option("--color-topic", o.color_topic, "ROS recording: the colour image topic (default: found by type)");
   cmd.add_option("--depth-topic", o.depth_topic, "ROS recording: the depth image topic (default: found by type)");
+  cmd.add_option("--gt-frames", o.gt_frames,
+                 "ROS recording: ground truth from /tf, PARENT,CHILD (e.g. world,kinect; default: groundtruth.txt beside it)");
 }
 
 // The options benchmark and batch share: the settings of every run, and where the runs go.
@@ -195,7 +197,9 @@ int run_cli(int argc, char** argv) {
 
   LiveOptions live;
   CLI::App* live_cmd = cli.add_subcommand("live", "Live SLAM on frames as they arrive, with a viewer window");
-  live_cmd->add_option("source", live.source, "Dataset folder to replay at its recorded rate, or with --watch the folder a camera driver writes")->required();
+  live_cmd->add_option("source", live.source,
+                       "Dataset folder or ROS recording (.bag, .mcap) to replay at its recorded rate, or with --watch the "
+                       "folder a camera driver writes")->required();
   live_cmd->add_option("--out", live.out, "Output directory")->required();
   live_cmd->add_flag("--watch", live.watch, "Take frames written into SOURCE/rgb and SOURCE/depth as they appear");
   live_cmd->add_flag("--headless", live.headless, "No window (robots without a display)");

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <map>
 #include <sstream>
+
+#include <Eigen/Geometry>
 
 #include "datasets/bag_reader.h"
 #include "datasets/ros_image_decode.h"
@@ -133,6 +136,74 @@ Chosen choose_topic(const BagReader& bag, const std::vector<BagTopic>& topics, c
   return chosen;
 }
 
+// --gt-frames "world,kinect": each entry's pose of the child frame in the parent frame from the
+// recording's transforms, chained child -> its parent -> ... -> parent.
+void attach_tf_ground_truth(Dataset& d, const BagReader& bag, const std::string& gt_frames) {
+  const std::filesystem::path& path = bag.path();
+  const auto comma = gt_frames.find(',');
+  const auto frame = [](std::string id) { return id.empty() || id[0] != '/' ? id : id.substr(1); };
+  const std::string world = frame(gt_frames.substr(0, comma));
+  const std::string camera = comma == std::string::npos ? "" : frame(gt_frames.substr(comma + 1));
+  if (world.empty() || camera.empty() || camera.find(',') != std::string::npos) {
+    throw splat::Error("--gt-frames '" + gt_frames + "': expected PARENT,CHILD (e.g. world,kinect)");
+  }
+  struct Edge {
+    std::string parent;
+    std::vector<RosTransform> samples;  // by stamp
+  };
+  std::map<std::string, Edge> edges;  // by child frame
+  for (const RosTransform& t : bag.transforms()) {
+    Edge& e = edges[t.child];
+    if (e.samples.empty()) e.parent = t.parent;
+    if (e.parent == t.parent) e.samples.push_back(t);  // a frame has one parent in a tf tree
+  }
+  for (auto& [child, e] : edges) {
+    std::stable_sort(e.samples.begin(), e.samples.end(),
+                     [](const RosTransform& x, const RosTransform& y) { return x.stamp < y.stamp; });
+  }
+  std::vector<const Edge*> chain;  // camera's edge first
+  for (std::string f = camera; f != world;) {
+    const auto it = edges.find(f);
+    if (it == edges.end() || chain.size() > edges.size()) {
+      std::string known;
+      for (const auto& [child, e] : edges) known += (known.empty() ? "" : ", ") + e.parent + " -> " + child;
+      fail(path, "--gt-frames " + gt_frames + ": no chain of transforms from " + world + " to " + camera +
+                     " in /tf, /tf_static (" + (known.empty() ? std::string("none there") : known) + ")");
+    }
+    chain.push_back(&it->second);
+    f = it->second.parent;
+  }
+  const auto at = [](const Edge& e, double t) -> std::optional<Eigen::Isometry3d> {
+    const auto& s = e.samples;
+    auto it = std::lower_bound(s.begin(), s.end(), t, [](const RosTransform& x, double v) { return x.stamp < v; });
+    const RosTransform* best = nullptr;
+    if (it != s.end()) best = &*it;
+    if (it != s.begin() && (!best || t - std::prev(it)->stamp < best->stamp - t)) best = &*std::prev(it);
+    if (!best) return std::nullopt;
+    // Within 0.02 s, as TUM's associate.py pairs poses with frames; static transforms always.
+    if (!best->is_static && std::abs(best->stamp - t) > 0.02) return std::nullopt;
+    const auto& q = best->rotation;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(best->translation[0], best->translation[1], best->translation[2]);
+    return T;
+  };
+  std::size_t found = 0;
+  for (DatasetEntry& entry : d.entries) {
+    Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+    bool complete = true;
+    for (auto e = chain.rbegin(); e != chain.rend() && complete; ++e) {
+      const auto T = at(**e, entry.timestamp);
+      if (T) T_world_camera = T_world_camera * *T;
+      complete = T.has_value();
+    }
+    if (complete) entry.T_world_cam_truth = T_world_camera, ++found;
+  }
+  if (found == 0 && !d.entries.empty()) {
+    d.warnings.push_back(path.string() + ": --gt-frames " + gt_frames + ": no transform within 0.02 s of any frame; the frames have no ground truth");
+  }
+}
+
 }  // namespace
 
 Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& options) {
@@ -210,6 +281,7 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
                    " (gslam needs depth registered to colour)");
   }
   d.store = std::make_shared<BagFrameStore>(bag, colour.topic, depth.topic, pairs);
+  if (!options.gt_frames.empty()) attach_tf_ground_truth(d, *bag, options.gt_frames);
   return d;
 }
 

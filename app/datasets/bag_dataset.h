@@ -13,7 +13,10 @@ namespace app {
 // Intrinsics from the CameraInfo beside the colour topic (its namespace), else the only one, else
 // options.intrinsics (open_dataset() applies them over it); depth scale by the encoding unless
 // options.depth_scale. Entries name the file as rgb and depth; Dataset::store reads their pixels,
-// one message at a time. Ground truth and --max-frames are applied by open_dataset().
+// one message at a time. With options.gt_frames "PARENT,CHILD" the ground truth is CHILD's pose in
+// PARENT from the recording's /tf and /tf_static, chained through intermediate frames, each
+// transform the one nearest the frame's stamp within 0.02 s (static ones at any time); otherwise
+// open_dataset() reads groundtruth.txt beside the file. --max-frames is applied by open_dataset().
 // Throws splat::Error naming the file: unreadable, no or several candidate topics (listing
 // them), encodings gslam does not read or that change along a topic, no camera.
 Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& options);

@@ -29,6 +29,16 @@ struct RosCameraInfo {
   std::array<double, 9> k{};  // row-major: fx 0 cx, 0 fy cy, 0 0 1
 };
 
+// One transform of a tf2_msgs/TFMessage (ROS 1's tf/tfMessage alike): the pose of frame
+// `child` in frame `parent` at `stamp`, p_parent = T_parent_child * p_child.
+struct RosTransform {
+  double stamp = 0;           // header.stamp, seconds
+  std::string parent, child;  // frame ids without a leading '/'
+  std::array<double, 3> translation{};
+  std::array<double, 4> rotation{0, 0, 0, 1};  // quaternion x, y, z, w
+  bool is_static = false;                      // from /tf_static: valid at every time
+};
+
 struct BagTopic {
   std::string name;
   std::string type;  // ROS 1 spelling: "sensor_msgs/Image" (ROS 2's "sensor_msgs/msg/Image" too)
@@ -48,6 +58,9 @@ class BagReader {
   virtual RosImage read_image(const std::string& topic, std::size_t k) const = 0;
   // The first CameraInfo message on `topic`; nullopt when it has none.
   virtual std::optional<RosCameraInfo> camera_info(const std::string& topic) const = 0;
+  // Every transform of the TFMessage topics (/tf, /tf_static), each topic's in recording order. Throws
+  // splat::Error naming the file for a malformed message.
+  virtual std::vector<RosTransform> transforms() const = 0;
 };
 
 // ".bag" or ".mcap" (any case): a recording rather than a dataset folder.

@@ -432,14 +432,14 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   const bool recording = is_bag_file(root);
   if (recording && !std::filesystem::is_regular_file(root)) fail(root, "recording does not exist");
   if (!recording && !std::filesystem::is_directory(root)) fail(root, "dataset folder does not exist");
-  if (!recording && (!options.color_topic.empty() || !options.depth_topic.empty())) {
-    fail(root, "--color-topic and --depth-topic are for ROS recordings (.bag, .mcap), not a folder");
+  if (!recording && (!options.color_topic.empty() || !options.depth_topic.empty() || !options.gt_frames.empty())) {
+    fail(root, "--color-topic, --depth-topic and --gt-frames are for ROS recordings (.bag, .mcap), not a folder");
   }
   Dataset d;
   if (recording) {
     d = open_bag(root, options);
     if (!options.intrinsics.empty()) apply_intrinsics(d.intrinsics, options.intrinsics);
-    attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
+    if (options.gt_frames.empty()) attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
   } else if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
     d = open_tum(root, options);
   } else if (std::filesystem::exists(root / "traj.txt") && std::filesystem::is_directory(root / "results")) {

@@ -17,6 +17,7 @@ struct DatasetOptions {
   int max_frames = 0;       // 0 = all
   std::string color_topic;  // ROS recordings: the colour and depth image topics (default: found
   std::string depth_topic;  // by message type and encoding, datasets/bag_dataset.h)
+  std::string gt_frames;    // ROS recordings: "world,kinect", ground truth from /tf (else groundtruth.txt)
 };
 
 struct DatasetEntry {

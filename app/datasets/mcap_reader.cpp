@@ -128,7 +128,7 @@ class MessageCursor {
   std::size_t pos_ = 0, base_ = 0;
 };
 
-enum class Kind { kOther, kImage, kCompressedImage, kCameraInfo };
+enum class Kind { kOther, kImage, kCompressedImage, kCameraInfo, kTf };
 
 // Image or CompressedImage up to its pixels; with_data copies them, otherwise only their size
 // is checked against the message's (`data_bytes`).
@@ -173,6 +173,28 @@ RosCameraInfo parse_camera_info(std::span<const std::uint8_t> bytes, bool ros1) 
   return info;
 }
 
+// tf2_msgs/TFMessage: geometry_msgs/TransformStamped[] (header, child_frame_id, translation
+// x y z, rotation x y z w, all float64).
+std::vector<RosTransform> parse_tf(std::span<const std::uint8_t> bytes, bool ros1, bool is_static) {
+  MessageCursor c(bytes, ros1);
+  const std::uint32_t n = c.number<std::uint32_t>("transforms length");
+  // Each transform takes at least 56 bytes of float64s: a count beyond that is malformed.
+  if (std::uint64_t(n) * 56 > bytes.size()) throw Malformed{"transforms length " + std::to_string(n) + " exceeds the message"};
+  const auto frame = [](std::string id) { return id.empty() || id[0] != '/' ? id : id.substr(1); };
+  std::vector<RosTransform> out(n);
+  for (RosTransform& t : out) {
+    if (ros1) c.number<std::uint32_t>("header.seq");
+    const double sec = ros1 ? double(c.number<std::uint32_t>("header.stamp.sec")) : double(c.number<std::int32_t>("header.stamp.sec"));
+    t.stamp = sec + double(c.number<std::uint32_t>("header.stamp.nanosec")) / 1e9;
+    t.parent = frame(c.string("header.frame_id"));
+    t.child = frame(c.string("child_frame_id"));
+    for (double& v : t.translation) v = c.number<double>("translation");
+    for (double& v : t.rotation) v = c.number<double>("rotation");
+    t.is_static = is_static;
+  }
+  return out;
+}
+
 // ROS 1 spelling of a type name: "sensor_msgs/msg/Image" -> "sensor_msgs/Image".
 std::string ros1_type(std::string name) {
   const auto at = name.find("/msg/");
@@ -184,6 +206,7 @@ Kind kind_of(const std::string& type) {
   if (type == "sensor_msgs/Image") return Kind::kImage;
   if (type == "sensor_msgs/CompressedImage") return Kind::kCompressedImage;
   if (type == "sensor_msgs/CameraInfo") return Kind::kCameraInfo;
+  if (type == "tf2_msgs/TFMessage" || type == "tf/tfMessage") return Kind::kTf;
   return Kind::kOther;
 }
 
@@ -267,6 +290,8 @@ class McapReader final : public BagReader {
     if (it == camera_infos_.end()) return std::nullopt;
     return it->second;
   }
+
+  std::vector<RosTransform> transforms() const override { return transforms_; }
 
  private:
   struct Channel {
@@ -391,14 +416,19 @@ class McapReader final : public BagReader {
                   body + c.pos(), data_length};
         if (m.header.stamp == 0) m.header.stamp = double(log_time) / 1e9;
         images_[channel.topic].push_back(std::move(m));
-      } else if (channel.kind == Kind::kCameraInfo && !camera_infos_.count(channel.topic)) {
+      } else if ((channel.kind == Kind::kCameraInfo && !camera_infos_.count(channel.topic)) || channel.kind == Kind::kTf) {
         std::vector<std::uint8_t> whole;
         std::span<const std::uint8_t> data = c.rest();
         if (data.size() < data_length) {  // outside a chunk only the start was read
           whole = read_small(body + c.pos(), data_length);
           data = whole;
         }
-        camera_infos_[channel.topic] = parse_camera_info(data, ros1);
+        if (channel.kind == Kind::kCameraInfo) {
+          camera_infos_[channel.topic] = parse_camera_info(data, ros1);
+        } else {
+          const auto tf = parse_tf(data, ros1, channel.topic == "/tf_static" || channel.topic == "tf_static");
+          transforms_.insert(transforms_.end(), tf.begin(), tf.end());
+        }
       }
     } catch (const Malformed& e) {
       throw Malformed{"message " + std::to_string(channel.messages - 1) + " on " + channel.topic + ": " + e.what};
@@ -511,6 +541,7 @@ class McapReader final : public BagReader {
   std::map<std::uint16_t, Channel> channels_;
   std::map<std::string, std::vector<Indexed>> images_;
   std::map<std::string, RosCameraInfo> camera_infos_;
+  std::vector<RosTransform> transforms_;
   // The last chunk a message was read from: colour and depth of one frame are usually in one.
   mutable std::mutex chunk_mutex_;
   mutable std::uint64_t cached_chunk_ = kNoChunk;

@@ -11,6 +11,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
 #endif
 
 namespace app {
@@ -77,6 +78,34 @@ class Ros1BagReader final : public BagReader {
     const Index& index = indexed(topic);
     RosImage out;
     guarded([&] { out = to_image(index.messages.at(k), true); });
+    return out;
+  }
+
+  std::vector<RosTransform> transforms() const override {
+    std::lock_guard lock(mutex_);
+    std::vector<RosTransform> out;
+    const auto frame = [](const std::string& id) { return id.empty() || id[0] != '/' ? id : id.substr(1); };
+    guarded([&] {
+      for (const auto& [name, topic] : topics_) {
+        // tf/tfMessage has tf2_msgs/TFMessage's definition and MD5, so one type reads both.
+        if (topic.type != "tf2_msgs/TFMessage" && topic.type != "tf/tfMessage") continue;
+        rosbag::View view(bag_, rosbag::TopicQuery(name));
+        for (const rosbag::MessageInstance& m : view) {
+          const auto tf = m.instantiate<tf2_msgs::TFMessage>();
+          if (!tf) continue;
+          for (const auto& t : tf->transforms) {
+            RosTransform r;
+            r.stamp = seconds(t.header.stamp, m.getTime());
+            r.parent = frame(t.header.frame_id);
+            r.child = frame(t.child_frame_id);
+            r.translation = {t.transform.translation.x, t.transform.translation.y, t.transform.translation.z};
+            r.rotation = {t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w};
+            r.is_static = name == "/tf_static";
+            out.push_back(r);
+          }
+        }
+      }
+    });
     return out;
   }
 

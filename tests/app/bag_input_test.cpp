@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -59,13 +60,66 @@ std::string mcap_writer_missing() {
   return "";
 }
 
-// "1311867170.462290" -> {1311867170, 462290000}: a TUM file name's stamp as a ROS time, exactly.
-std::array<std::uint32_t, 2> ros_time(const std::filesystem::path& file) {
-  const std::string stem = file.stem().string();
+// "1311867170.462290" -> {1311867170, 462290000}: a TUM stamp as a ROS time, exactly.
+std::array<std::uint32_t, 2> ros_time(const std::string& stem) {
   const auto dot = stem.find('.');
   std::string frac = dot == std::string::npos ? "" : stem.substr(dot + 1);
   frac.resize(9, '0');
   return {static_cast<std::uint32_t>(std::stoul(stem.substr(0, dot))), static_cast<std::uint32_t>(std::stoul(frac))};
+}
+
+std::array<std::uint32_t, 2> ros_time(const std::filesystem::path& file) { return ros_time(file.stem().string()); }
+
+// Motion capture as TUM's bags publish it: groundtruth.txt's poses of /kinect in /world within
+// the first `frames` frames' time span (on /tf), and a fixed mount /kinect -> /rgb_optical (on
+// /tf_static) that the ground truth must chain through.
+struct Transform {
+  std::array<std::uint32_t, 2> stamp;
+  std::array<double, 3> t;
+  std::array<double, 4> q;
+};
+constexpr std::array<double, 3> kMountT = {0.01, -0.02, 0.03};
+constexpr std::array<double, 4> kMountQ = {0, 0, 0.7071067811865476, 0.7071067811865476};  // 90 degrees about z
+
+std::vector<Transform> mocap(const app::Dataset& folder, int frames) {
+  std::ifstream in(gslam::test::shared_data(kTeddy) / "groundtruth.txt");
+  const double first = folder.entries.front().timestamp - 0.1, last = folder.entries[std::size_t(frames - 1)].timestamp + 0.1;
+  std::vector<Transform> out;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    std::string stamp;
+    Transform tf;
+    words >> stamp >> tf.t[0] >> tf.t[1] >> tf.t[2] >> tf.q[0] >> tf.q[1] >> tf.q[2] >> tf.q[3];
+    if (std::stod(stamp) < first || std::stod(stamp) > last) continue;
+    tf.stamp = ros_time(stamp);
+    out.push_back(tf);
+  }
+  return out;
+}
+
+// With --gt-frames world,rgb_optical: the folder's ground truth (groundtruth.txt) times the mount.
+void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::path& recording, int frames) {
+  app::DatasetOptions o;
+  o.gt_frames = "world,rgb_optical";
+  const app::Dataset bag = app::open_dataset(recording, o);
+  Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+  mount.linear() = Eigen::Quaterniond(kMountQ[3], kMountQ[0], kMountQ[1], kMountQ[2]).toRotationMatrix();
+  mount.translation() = Eigen::Vector3d(kMountT[0], kMountT[1], kMountT[2]);
+  int compared = 0;
+  for (int i = 0; i < frames; ++i) {
+    const auto& truth = folder.entries[std::size_t(i)].T_world_cam_truth;
+    const auto& from_tf = bag.entries[std::size_t(i)].T_world_cam_truth;
+    ASSERT_EQ(from_tf.has_value(), truth.has_value()) << "frame " << i;
+    if (!truth) continue;
+    EXPECT_TRUE(from_tf->isApprox(*truth * mount, 1e-9)) << "frame " << i << "\n" << from_tf->matrix() << "\n"
+                                                         << (*truth * mount).matrix();
+    ++compared;
+  }
+  EXPECT_GT(compared, frames / 2);
+  o.gt_frames = "world,nowhere";
+  GSLAM_EXPECT_ERROR(app::open_dataset(recording, o), "--gt-frames world,nowhere: no chain of transforms from world to nowhere",
+                     "world -> kinect", "kinect -> rgb_optical");
 }
 
 std::vector<std::uint8_t> colour_bytes(const splat::RgbdFrame& f, bool bgr) {
@@ -101,6 +155,7 @@ struct McapSpec {
   std::string colour_encoding = "bgr8";
   std::string depth_encoding = "32FC1";  // or 16UC1 (the PNG's values)
   bool depth = true, camera_info = true;
+  bool tf = false;  // mocap() on /tf and the mount on /tf_static
   int frames = kFrames;
 };
 
@@ -121,6 +176,25 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const st
   }
   std::ostringstream k;
   for (std::size_t i = 0; i < 9; ++i) k << (i ? "," : "") << kTeddyK[i];
+  std::ostringstream tf;
+  tf << std::setprecision(17);
+  if (spec.tf) {
+    const auto json = [&](const std::array<std::uint32_t, 2>& stamp, const char* parent, const char* child,
+                          const std::array<double, 3>& t, const std::array<double, 4>& q) {
+      tf << R"({"stamp": [)" << stamp[0] << "," << stamp[1] << R"(], "parent": ")" << parent << R"(", "child": ")"
+         << child << R"(", "t": [)" << t[0] << "," << t[1] << "," << t[2] << R"(], "q": [)" << q[0] << "," << q[1]
+         << "," << q[2] << "," << q[3] << "]}";
+    };
+    tf << R"(, "tf": [)";
+    const std::vector<Transform> poses = mocap(folder, spec.frames);
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      if (i) tf << ",";
+      json(poses[i].stamp, "/world", "/kinect", poses[i].t, poses[i].q);
+    }
+    tf << R"(], "tf_static": [)";
+    json(ros_time(folder.entries.front().rgb), "kinect", "rgb_optical", kMountT, kMountQ);
+    tf << "]";
+  }
   gslam::test::write_text(raw / "manifest.json",
                           R"({"compression": ")" + spec.compression + R"(", "chunk_size": 1500000, "width": 640, "height": 480, "k": [)" +
                               k.str() + R"(], "colour_topic": "/camera/rgb/image_color", "colour_encoding": ")" +
@@ -128,7 +202,7 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const st
                               (spec.depth ? R"("/camera/depth/image")" : "null") + R"(, "depth_encoding": ")" +
                               spec.depth_encoding + R"(", "info_topic": )" +
                               (spec.camera_info ? R"("/camera/rgb/camera_info")" : "null") + R"(, "frames": [)" +
-                              frames.str() + "]}");
+                              frames.str() + "]" + tf.str() + "}");
   const auto r = gslam::test::run_command("node " + std::string(GSLAM_SOURCE_DIR) + "/tests/interop/write_mcap.mjs " +
                                           GSLAM_TOOLS_DIR + " " + (raw / "manifest.json").string() + " " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -217,7 +291,9 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   TempDir dir;
   const app::Dataset folder = open_teddy(kFrames);
   const std::filesystem::path mcap = dir / "teddy.mcap";
-  write_teddy_mcap(folder, McapSpec{}, mcap);  // zstd chunks, bgr8 colour, 32FC1 depth
+  McapSpec spec;  // zstd chunks, bgr8 colour, 32FC1 depth
+  spec.tf = true;
+  write_teddy_mcap(folder, spec, mcap);
   std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt", dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(mcap);
   EXPECT_EQ(bag.format, "mcap");
@@ -229,6 +305,7 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   EXPECT_DOUBLE_EQ(bag.intrinsics.cy, kTeddyK[5]);
   EXPECT_TRUE(bag.has_ground_truth());
   expect_same_frames(folder, bag, kFrames);
+  expect_tf_ground_truth(folder, mcap, kFrames);
   expect_same_reconstruction(mcap, dir);
   expect_live_replay(mcap, dir);
 }
@@ -292,7 +369,7 @@ TEST_F(McapInput, BadRecordingsGiveOneLineErrors) {
   // Topic options are for recordings only.
   o = {};
   o.color_topic = "/x";
-  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddy), o), "--color-topic and --depth-topic are for ROS recordings");
+  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddy), o), "--color-topic, --depth-topic and --gt-frames are for ROS recordings");
 }
 
 // Hand-made MCAP records: sizes that do not fit are refused before anything is allocated.
@@ -345,6 +422,9 @@ void write_teddy_bag(const app::Dataset& folder, int frames, const std::filesyst
     bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3, colour_bytes(f, false));
     bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4, float_bytes(f.depth));
   }
+  for (const Transform& tf : mocap(folder, frames)) bag.transform("/tf", tf.stamp[0], tf.stamp[1], "/world", "/kinect", tf.t, tf.q);
+  const auto t0 = ros_time(folder.entries.front().rgb);
+  bag.transform("/tf_static", t0[0], t0[1], "kinect", "rgb_optical", kMountT, kMountQ);
   bag.close();
 }
 #endif
@@ -370,6 +450,7 @@ TEST_F(Ros1BagInput, RosbagFileGivesTheFolderFramesAndTrajectory) {
   EXPECT_DOUBLE_EQ(bag.intrinsics.fx, kTeddyK[0]);
   EXPECT_DOUBLE_EQ(bag.intrinsics.cy, kTeddyK[5]);
   expect_same_frames(folder, bag, kFrames);
+  expect_tf_ground_truth(folder, dir / "teddy.bag", kFrames);
   expect_same_reconstruction(dir / "teddy.bag", dir);
 #endif
 }

@@ -5,7 +5,8 @@
 // MANIFEST: {compression: "zstd" | "lz4" | "", chunk_size, width, height, k: [9 numbers],
 //   colour_topic, colour_encoding (rgb8, bgr8, ...; "png" makes CompressedImage), depth_topic,
 //   depth_encoding (16UC1 | 32FC1), info_topic (depth_topic, info_topic null: none written),
-//   frames: [{colour: FILE, colour_stamp: [sec, nsec], depth: FILE, depth_stamp: [sec, nsec]}]}
+//   frames: [{colour: FILE, colour_stamp: [sec, nsec], depth: FILE, depth_stamp: [sec, nsec]}],
+//   tf, tf_static (optional): [{stamp: [sec, nsec], parent, child, t: [x, y, z], q: [x, y, z, w]}]}
 // Colour files hold [H, W, 3] rows in the topic's encoding (or the PNG file), depth files the
 // [H, W] values in the encoding's type, little-endian. lz4 chunks come from the lz4 command (the
 // LZ4 project's frame compressor); zstd from @foxglove/wasm-zstd.
@@ -35,6 +36,11 @@ const definitions = {
     "float64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\nuint32 binning_y\n" +
     "sensor_msgs/RegionOfInterest roi" + separator + header + separator +
     "MSG: sensor_msgs/RegionOfInterest\nuint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify",
+  "tf2_msgs/msg/TFMessage": "geometry_msgs/TransformStamped[] transforms" + separator +
+    "MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform" +
+    separator + "MSG: geometry_msgs/Transform\ngeometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation" +
+    separator + "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z" + separator +
+    "MSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w" + separator + header,
 };
 
 let compressChunk;
@@ -114,6 +120,20 @@ for (const [i, f] of manifest.frames.entries()) {
     header: headerOf(f.depth_stamp, "depth"), height, width, encoding: manifest.depth_encoding, is_bigendian: 0,
     step: width * bytesPer[manifest.depth_encoding], data: depth,
   });
+}
+// Motion capture on /tf (one transform a message, as a mocap driver publishes), fixed mounts on
+// /tf_static.
+for (const topic of ["tf", "tf_static"]) {
+  if (!manifest[topic]) continue;
+  await channel("/" + topic, "tf2_msgs/msg/TFMessage");
+  for (const tf of manifest[topic]) {
+    await publish("/" + topic, tf.stamp, {
+      transforms: [{
+        header: headerOf(tf.stamp, tf.parent), child_frame_id: tf.child,
+        transform: { translation: { x: tf.t[0], y: tf.t[1], z: tf.t[2] }, rotation: { x: tf.q[0], y: tf.q[1], z: tf.q[2], w: tf.q[3] } },
+      }],
+    });
+  }
 }
 await writer.end();
 fs.closeSync(fd);

@@ -3,6 +3,7 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
 
 namespace gslam::test {
 
@@ -42,6 +43,19 @@ void Ros1BagWriter::camera_info(const std::string& topic, std::uint32_t sec, std
   m.D = {0, 0, 0, 0, 0};
   for (std::size_t i = 0; i < 9; ++i) m.K[i] = k[i];
   impl_->bag.write(topic, m.header.stamp, m);
+}
+
+void Ros1BagWriter::transform(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, const std::string& parent,
+                              const std::string& child, const std::array<double, 3>& t, const std::array<double, 4>& q) {
+  geometry_msgs::TransformStamped ts;
+  ts.header.stamp = ros::Time(sec, nsec);
+  ts.header.frame_id = parent;
+  ts.child_frame_id = child;
+  ts.transform.translation.x = t[0], ts.transform.translation.y = t[1], ts.transform.translation.z = t[2];
+  ts.transform.rotation.x = q[0], ts.transform.rotation.y = q[1], ts.transform.rotation.z = q[2], ts.transform.rotation.w = q[3];
+  tf2_msgs::TFMessage m;
+  m.transforms.push_back(ts);
+  impl_->bag.write(topic, ts.header.stamp, m);
 }
 
 void Ros1BagWriter::close() { impl_->bag.close(); }

@@ -20,6 +20,9 @@ class Ros1BagWriter {
              std::uint32_t width, std::uint32_t height, std::uint32_t step, const std::vector<std::uint8_t>& data);
   void camera_info(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, std::uint32_t width,
                    std::uint32_t height, const std::array<double, 9>& k);
+  // A tf2_msgs/TFMessage with one transform: child's pose in parent (t: x y z, q: x y z w).
+  void transform(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, const std::string& parent,
+                 const std::string& child, const std::array<double, 3>& t, const std::array<double, 4>& q);
   void close();
 
  private:
