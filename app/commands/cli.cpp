@@ -64,6 +64,13 @@ void add_topic_options(CLI::App& cmd, DatasetOptions& o) {
                  "ROS recording: ground truth from /tf, PARENT,CHILD (e.g. world,kinect; default: groundtruth.txt beside it)");
 }
 
+// Label images from a segmenter (datasets/label_images.h).
+void add_label_option(CLI::App& cmd, DatasetOptions& o) {
+  cmd.add_option("--labels", o.labels,
+                 "Folder of label images (NAME.png per colour frame, class ids) with classes.json; default: labels/ "
+                 "beside the colour folder when it has classes.json");
+}
+
 // The options benchmark and batch share: the settings of every run, and where the runs go.
 void add_sequence_run_options(CLI::App& cmd, BenchmarkOptions& o) {
   cmd.add_option("--config", o.config, "JSON file with SLAM settings, the same for every sequence");
@@ -178,6 +185,7 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*recon_cmd, recon.dataset_options);
+  add_label_option(*recon_cmd, recon.dataset_options);
   recon_cmd->add_option("--config", recon.config, "JSON file with SLAM settings");
   recon_cmd->add_option("--test-every", recon.test_every,
                         "Hold out every N-th frame as a test view: tracked, never mapped (gslam eval scores them apart)")
@@ -191,6 +199,7 @@ int run_cli(int argc, char** argv) {
   eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
   eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*eval_cmd, eval.dataset_options);
+  add_label_option(*eval_cmd, eval.dataset_options);
   eval_cmd->add_flag("--sim3", eval.sim3, "Align with scale (similarity) instead of rigidly");
   eval_cmd->add_option("--every", eval.every, "Measure rendering quality on every N-th frame")->capture_default_str();
   add_backend_options(*eval_cmd, eval.backend);
@@ -217,6 +226,7 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
   live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*live_cmd, live.dataset_options);
+  add_label_option(*live_cmd, live.dataset_options);
   live_cmd->add_option("--idle-timeout", live.watch_options.idle_timeout, "--watch: seconds without frames that end the stream")->capture_default_str();
   live_cmd->add_option("--checkpoint-seconds", live.checkpoint_seconds, "Rewrite the outputs this often")->capture_default_str();
   live_cmd->add_option("--config", live.config, "JSON file with SLAM settings");

@@ -3,17 +3,20 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.h"
 #include "commands/evaluation.h"
+#include "commands/label_maps.h"
 #include "commands/run_input.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
 #include "io/plot.h"
 #include "io/run_folder.h"
 #include "commands/progress.h"
+#include "mapping/label_fusion.h"
 #include "mapping/vignetting.h"
 #include "splat/error.h"
 #include "splat/losses.h"
@@ -93,6 +96,10 @@ int run_eval(const EvalOptions& o) {
   const mapping::Vignetting vignetting = run_vignetting(o.run);
   // Training views (the frames mapping could use) and held-out test views (--test-every), apart.
   RenderStats training, held_out;
+  // The map's classes against the label images, where both exist.
+  const bool score_labels = !map.labels.empty() && dataset.labels.has_value();
+  std::optional<LabelScore> training_labels, held_out_labels;
+  if (score_labels) training_labels.emplace(*dataset.labels), held_out_labels.emplace(*dataset.labels);
   std::vector<double> frame_times, frame_psnr, frame_ssim;  // per rendered frame, for the plot
   Progress progress("eval renders", pairs.size(), "frames");
   const std::size_t every = static_cast<std::size_t>(std::max(1, o.every));
@@ -120,6 +127,9 @@ int run_eval(const EvalOptions& o) {
     std::vector<float> dgrad(f.depth.size());
     stats.depth_l1 += splat::depth_l1_loss<float>(f.depth_normalized, frame.depth, {}, dgrad);
     ++stats.frames;
+    if (score_labels && !frame.labels.empty()) {
+      (test_view ? held_out_labels : training_labels)->add(mapping::render_labels(*rasterizer, map.gaussians, map.labels, cam), frame.labels);
+    }
     progress.update(k + 1);
   }
   progress.finish();
@@ -142,6 +152,10 @@ int run_eval(const EvalOptions& o) {
   if (recorded.test_every > 0) {
     j["held_out_rendering"] = held_out.to_json();
     j["held_out_rendering"]["test_every"] = recorded.test_every;
+  }
+  if (score_labels) {
+    j["labels"] = training_labels->json();
+    if (held_out_labels->views() > 0) j["labels"]["held_out"] = held_out_labels->json();
   }
   write_json(o.run / "eval.json", j);
 
@@ -197,6 +211,10 @@ int run_eval(const EvalOptions& o) {
     const double h = static_cast<double>(held_out.frames);
     std::printf("; held-out views (%zu): PSNR %.2f dB, SSIM %.3f, depth L1 %.2f cm", held_out.frames,
                 held_out.psnr / h, held_out.ssim / h, held_out.depth_l1 / h * 100);
+  }
+  if (score_labels) {
+    std::printf("; labels: mIoU %.3f", training_labels->miou());
+    if (held_out_labels->views() > 0) std::printf(" (held-out views %.3f)", held_out_labels->miou());
   }
   std::printf(" -> %s\n", (o.run / "eval.json").c_str());
   return 0;

@@ -198,7 +198,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
   std::vector<std::filesystem::path> files = {"trajectory.txt"};
   if (!map.empty()) {
     files.insert(files.end(), {"map.ply", "map.glb"});
-    save_map(out_ / "map.ply", map);
+    save_map(out_ / "map.ply", map, Eigen::Quaterniond::Identity(), labels_.size() == map.size() ? &labels_ : nullptr);
     // The world's up (the floor's normal, else the cameras'), recorded and standing map.glb
     // upright in glTF's axes (+Y up).
     Eigen::Quaterniond gltf_from_world = Eigen::Quaterniond::Identity();

@@ -14,6 +14,7 @@
 #include "slam/frame_tracker.h"
 #include "slam/slam_system.h"
 #include "io/trajectory.h"
+#include "splat/gaussian_labels.h"
 #include "splat/rasterizer.h"
 
 namespace app {
@@ -52,6 +53,8 @@ class RunOutputs {
   void checkpoint(const splat::Gaussians& map, std::size_t keyframes, bool with_map);
   // Writes everything: trajectory, map.ply, map.glb, keyframe renders and the final summary
   // (with ATE when `truth` has poses).
+  // The map's classes (fused from label images), written into map.ply by finish().
+  void set_labels(splat::GaussianLabels labels) { labels_ = std::move(labels); }
   void finish(const splat::Gaussians& map, std::size_t keyframes, splat::Rasterizer& rasterizer,
               const splat::Camera& intrinsics, const std::vector<StampedPose>& truth);
 
@@ -60,6 +63,7 @@ class RunOutputs {
   double elapsed_seconds() const;
 
  private:
+  splat::GaussianLabels labels_;
   // The summary, with the manifest of `files` (written before it).
   nlohmann::json summary(const splat::Gaussians& map, std::size_t keyframes, bool complete,
                          const std::vector<std::filesystem::path>& files) const;

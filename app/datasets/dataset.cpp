@@ -418,6 +418,15 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
   f.depth.resize(depth.data.size());
   const float inv = static_cast<float>(1.0 / depth_scale);
   for (std::size_t k = 0; k < depth.data.size(); ++k) f.depth[k] = static_cast<float>(depth.data[k]) * inv;
+  if (labels) {
+    if (std::optional<std::vector<uint16_t>> ids = read_label_image(*labels, e.rgb, f.width(), f.height())) {
+      f.labels = std::move(*ids);
+      if (std::any_of(labels->classes.begin(), labels->classes.end(), [](const LabelClass& c) { return c.dynamic; })) {
+        f.ignore.resize(f.labels.size());
+        for (std::size_t k = 0; k < f.labels.size(); ++k) f.ignore[k] = labels->is_dynamic(f.labels[k]);
+      }
+    }
+  }
   return f;
 }
 
@@ -470,6 +479,14 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
     d.entries.resize(static_cast<std::size_t>(options.max_frames));
   }
   if (!d.store) set_size_from(d.intrinsics, d.entries.front().rgb);
+  // Label images: named, or labels/ beside the colour folder.
+  if (d.store && !options.labels.empty()) fail(options.labels, "label images are read for dataset folders, not recordings");
+  if (!options.labels.empty()) {
+    d.labels = read_label_set(options.labels);
+  } else if (!d.store) {
+    const std::filesystem::path beside = d.entries.front().rgb.parent_path().parent_path() / "labels";
+    if (std::filesystem::exists(beside / "classes.json")) d.labels = read_label_set(beside);
+  }
   return d;
 }
 

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "datasets/label_images.h"
 #include "splat/rgbd_frame.h"
 
 namespace app {
@@ -18,6 +19,9 @@ struct DatasetOptions {
   std::string color_topic;  // ROS recordings: the colour and depth image topics (default: found
   std::string depth_topic;  // by message type and encoding, datasets/bag_dataset.h)
   std::string gt_frames;    // ROS recordings: "world,kinect", ground truth from /tf (else groundtruth.txt)
+  // Label images (datasets/label_images.h); empty: labels/ beside the colour folder, if it holds
+  // classes.json.
+  std::filesystem::path labels;
 };
 
 struct DatasetEntry {
@@ -45,6 +49,7 @@ struct Dataset {
   double depth_scale = 5000;
   std::vector<DatasetEntry> entries;  // in a recording, rgb and depth both name the file
   std::shared_ptr<const FrameStore> store;  // set for recordings: their frames' pixels
+  std::optional<LabelSet> labels;  // the sequence's label images, if it has them
   // Where the listed frames went: listed = entries.size() + missing_colour + unmatched +
   // beyond_max_frames. A folder holding part of a sequence (lists for all of it, images for some)
   // is normal and not a warning.
@@ -62,7 +67,8 @@ struct Dataset {
   // or "193 frames" when every listed frame is used.
   std::string frames_used() const;
 
-  // Reads entry i (colour /255, depth / depth_scale), from its files or from `store`. Throws
+  // Reads entry i (colour /255, depth / depth_scale), from its files or from `store`, with its
+  // label image where there is one (pixels of dynamic classes ignored). Throws
   // splat::Error naming the file for unreadable images or a size that does not match the intrinsics.
   splat::RgbdFrame load(std::size_t i) const;
   bool has_ground_truth() const;

@@ -41,6 +41,8 @@ splat::Image8 read_rgb8(const std::filesystem::path& path);
 
 // Reads a single-channel 16-bit PNG (depth maps) exactly as stored.
 splat::Image16 read_png_gray16(const std::filesystem::path& path);
+// An 8 or 16-bit greyscale PNG of class ids (label images), widened to 16 bits.
+splat::Image16 read_png_labels(const std::filesystem::path& path);
 
 // A rendering in one EXR file as compositing tools expect it: R, G, B linear light (the sRGB
 // transfer removed) premultiplied by A, and Z (depth in metres, 0 where nothing was hit), all

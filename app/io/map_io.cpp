@@ -12,6 +12,7 @@ LoadedMap load_map(const std::filesystem::path& path) {
   if (ext == ".ply") {
     PlyMap ply = read_ply(path);
     out.gaussians = std::move(ply.gaussians);
+    out.labels = std::move(ply.labels);
     if (!ply.skipped_properties.empty()) {
       std::string names;
       for (const auto& name : ply.skipped_properties) names += (names.empty() ? "" : ", ") + name;
@@ -29,9 +30,9 @@ LoadedMap load_map(const std::filesystem::path& path) {
 }
 
 void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussians,
-              const Eigen::Quaterniond& gltf_from_world) {
+              const Eigen::Quaterniond& gltf_from_world, const splat::GaussianLabels* labels) {
   const std::string ext = path.extension().string();
-  if (ext == ".ply") return write_ply(path, gaussians);
+  if (ext == ".ply") return write_ply(path, gaussians, labels);
   if (ext == ".glb" || ext == ".gltf") return write_gltf(path, gaussians, gltf_from_world);
   throw splat::Error(path.string() + ": unknown map format '" + ext + "', expected .ply, .glb or .gltf");
 }

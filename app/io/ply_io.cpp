@@ -141,12 +141,13 @@ struct Layout {
   int x = -1, y = -1, z = -1, opacity = -1;
   int dc[3] = {-1, -1, -1}, scale[3] = {-1, -1, -1}, rot[4] = {-1, -1, -1, -1};
   std::vector<int> rest;  // f_rest_0..M-1
+  std::vector<int> label, probability;  // label_0..K-1 and label_probability_0..K-1, if any
 };
 
 Layout make_layout(const Element& vertex, const std::filesystem::path& path,
                    std::vector<std::string>& skipped) {
   Layout l;
-  std::map<int, int> rest;
+  std::map<int, int> rest, label, probability;
   for (int i = 0; i < static_cast<int>(vertex.properties.size()); ++i) {
     const Property& p = vertex.properties[static_cast<std::size_t>(i)];
     if (p.is_list) fail(path, "vertex property '" + p.name + "' is a list, expected a scalar");
@@ -160,7 +161,13 @@ Layout make_layout(const Element& vertex, const std::filesystem::path& path,
     else if (std::sscanf(p.name.c_str(), "f_dc_%d", &index) == 1 && index >= 0 && index < 3) slot = &l.dc[index];
     else if (std::sscanf(p.name.c_str(), "scale_%d", &index) == 1 && index >= 0 && index < 3) slot = &l.scale[index];
     else if (std::sscanf(p.name.c_str(), "rot_%d", &index) == 1 && index >= 0 && index < 4) slot = &l.rot[index];
-    else if (std::sscanf(p.name.c_str(), "f_rest_%d", &index) == 1 && index >= 0) {
+    else if (std::sscanf(p.name.c_str(), "label_probability_%d", &index) == 1 && index >= 0 && index < 64) {
+      probability[index] = i;
+      continue;
+    } else if (std::sscanf(p.name.c_str(), "label_%d", &index) == 1 && index >= 0 && index < 64) {
+      label[index] = i;
+      continue;
+    } else if (std::sscanf(p.name.c_str(), "f_rest_%d", &index) == 1 && index >= 0) {
       if (!is_float_type(p.type)) fail(path, "property '" + p.name + "' has type " + p.type + ", expected float");
       rest[index] = i;
       continue;
@@ -184,6 +191,15 @@ Layout make_layout(const Element& vertex, const std::filesystem::path& path,
   for (int k = 0; k < static_cast<int>(rest.size()); ++k) {
     if (!rest.count(k)) fail(path, "f_rest_" + std::to_string(k) + " is missing (f_rest must be numbered 0..M-1)");
     l.rest.push_back(rest[k]);
+  }
+  // Labels (gslam's semantic maps): label_k with label_probability_k, k = 0..K-1.
+  for (int k = 0; k < static_cast<int>(std::max(label.size(), probability.size())); ++k) {
+    if (!label.count(k) || !probability.count(k)) {
+      fail(path, "label_" + std::to_string(k) + " and label_probability_" + std::to_string(k) +
+                     " must both be there (labels are numbered 0..K-1)");
+    }
+    l.label.push_back(label[k]);
+    l.probability.push_back(probability[k]);
   }
   return l;
 }
@@ -245,6 +261,12 @@ PlyMap read_ply(const std::filesystem::path& path) {
   }
 
   g.resize(n);
+  const auto top = static_cast<std::size_t>(layout.label.size());
+  if (top > 0) {
+    out.labels.top = static_cast<int>(top);
+    out.labels.ids.resize(n * top);
+    out.labels.probabilities.resize(n * top);
+  }
   std::vector<char> record(vertex_it->stride());
   const bool swap = header.encoding == Encoding::kBinaryBig;
   std::string line;
@@ -288,12 +310,25 @@ PlyMap read_ply(const std::filesystem::path& path) {
         sh[coeff * 3 + c] = value(layout.rest[static_cast<std::size_t>(c * (k - 1) + coeff - 1)]);
       }
     }
+    for (std::size_t t = 0; t < top; ++t) {
+      const float id = value(layout.label[t]), p = value(layout.probability[t]);
+      if (!(id >= 0 && id <= 65535 && id == std::floor(id)) || !(p >= 0 && p <= 1)) {
+        fail(path, "vertex " + std::to_string(v) + " label_" + std::to_string(t) + " " + std::to_string(id) +
+                       " with probability " + std::to_string(p) + ": expected an id 0..65535 and a probability in [0, 1]");
+      }
+      out.labels.ids[v * top + t] = static_cast<uint16_t>(id);
+      out.labels.probabilities[v * top + t] = p;
+    }
   }
   return out;
 }
 
-void write_ply(const std::filesystem::path& path, const splat::Gaussians& g) {
+void write_ply(const std::filesystem::path& path, const splat::Gaussians& g, const splat::GaussianLabels* labels) {
   splat::validate_sizes(splat::GaussiansView(g), "write_ply " + path.string());
+  const std::size_t top = labels && !labels->empty() ? static_cast<std::size_t>(labels->top) : 0;
+  if (top > 0 && (labels->ids.size() != g.size() * top || labels->probabilities.size() != labels->ids.size())) {
+    fail(path, "labels for " + std::to_string(labels->size()) + " Gaussians, the map has " + std::to_string(g.size()));
+  }
   const std::size_t n = g.size();
   const int k = splat::sh_coeff_count(g.sh_degree);
   write_atomically(path, [&](const std::filesystem::path& tmp) {
@@ -305,6 +340,8 @@ void write_ply(const std::filesystem::path& path, const splat::Gaussians& g) {
     for (int i = 0; i < 3 * (k - 1); ++i) names.push_back("f_rest_" + std::to_string(i));
     for (const char* name : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"}) names.push_back(name);
     for (const auto& name : names) out << "property float " << name << "\n";
+    for (std::size_t t = 0; t < top; ++t) out << "property ushort label_" << t << "\n";
+    for (std::size_t t = 0; t < top; ++t) out << "property float label_probability_" << t << "\n";
     out << "end_header\n";
     static_assert(std::endian::native == std::endian::little, "PLY writer assumes a little-endian host");
     std::vector<float> row(names.size());
@@ -320,6 +357,11 @@ void write_ply(const std::filesystem::path& path, const splat::Gaussians& g) {
       for (int a = 0; a < 3; ++a) row[c++] = g.log_scales[v * 3 + a];
       for (int a = 0; a < 4; ++a) row[c++] = g.rotations[v * 4 + a];
       out.write(reinterpret_cast<const char*>(row.data()), static_cast<std::streamsize>(row.size() * sizeof(float)));
+      if (top > 0) {
+        out.write(reinterpret_cast<const char*>(&labels->ids[v * top]), static_cast<std::streamsize>(top * sizeof(uint16_t)));
+        out.write(reinterpret_cast<const char*>(&labels->probabilities[v * top]),
+                  static_cast<std::streamsize>(top * sizeof(float)));
+      }
     }
     if (!out.flush()) fail(tmp, "write failed (disk full?)");
   });

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "splat/gaussian_labels.h"
 #include "splat/gaussians.h"
 
 namespace app {
@@ -10,6 +11,7 @@ namespace app {
 struct PlyMap {
   splat::Gaussians gaussians;
   std::vector<std::string> skipped_properties;  // vertex properties we do not use
+  splat::GaussianLabels labels;  // label_k / label_probability_k, where the file has them
 };
 
 // Reads a 3DGS map in the INRIA PLY layout (x y z [nx ny nz] f_dc_0..2 f_rest_* opacity
@@ -21,6 +23,9 @@ PlyMap read_ply(const std::filesystem::path& path);
 
 // Writes the map as binary little-endian float32 PLY in the INRIA layout (normals zero),
 // atomically. Reading it back gives bit-identical arrays.
-void write_ply(const std::filesystem::path& path, const splat::Gaussians& gaussians);
+// With `labels` (not empty), each vertex also gets label_k (ushort class id) and
+// label_probability_k (float) for k = 0..top-1, most probable first.
+void write_ply(const std::filesystem::path& path, const splat::Gaussians& gaussians,
+               const splat::GaussianLabels* labels = nullptr);
 
 }  // namespace app

@@ -162,4 +162,29 @@ splat::Image16 read_png_gray16(const std::filesystem::path& path) {
   });
 }
 
+splat::Image16 read_png_labels(const std::filesystem::path& path) {
+  // The bit depth decides the reader: IHDR's bit depth and colour type follow the signature,
+  // the chunk's length and name, the width and the height (bytes 24 and 25).
+  unsigned char header[26] = {};
+  {
+    File file(std::fopen(path.c_str(), "rb"));
+    if (!file) fail(path, "cannot open file");
+    if (std::fread(header, 1, sizeof header, file.get()) != sizeof header || png_sig_cmp(header, 0, 8) != 0) {
+      fail(path, "not a PNG file");
+    }
+  }
+  if (header[24] == 16) return read_png_gray16(path);
+  const splat::Image8 narrow = read_png<uint8_t>(path, 1, [](png_structp png, png_infop info) {
+    if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY || png_get_bit_depth(png, info) != 8) {
+      return "expected an 8 or 16-bit greyscale PNG of class ids, got colour type " +
+             std::to_string(png_get_color_type(png, info)) + " with " + std::to_string(png_get_bit_depth(png, info)) +
+             " bits";
+    }
+    return std::string();
+  });
+  splat::Image16 wide(narrow.width, narrow.height, 1);
+  std::copy(narrow.data.begin(), narrow.data.end(), wide.data.begin());
+  return wide;
+}
+
 }  // namespace app

@@ -121,9 +121,12 @@ std::shared_ptr<const tracking::OdometryFrame> FrameTracker::prepare(const splat
                                                                    const std::vector<uint8_t>& labels) const {
   if (labels.empty()) return std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
   splat::RgbdFrame masked = frame;
-  masked.ignore = upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
-  // Where an object left, the frame shows the static scene: only where one stands is ignored.
-  for (uint8_t& i : masked.ignore) i = i == tracking::kArrived;
+  const std::vector<uint8_t> spread =
+      upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
+  // Where an object left, the frame shows the static scene: only where one stands is ignored,
+  // besides what the frame ignores itself (classes its labels call dynamic).
+  if (masked.ignore.empty()) masked.ignore.assign(spread.size(), 0);
+  for (std::size_t i = 0; i < spread.size(); ++i) masked.ignore[i] |= spread[i] == tracking::kArrived;
   return std::make_shared<const tracking::OdometryFrame>(masked, config_.odometry);
 }
 
@@ -140,6 +143,7 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                    config_.moving.prior_grow_px)
           : std::vector<uint8_t>{};
   last_prepared_ = prepare(frame, prior);
+  prior_used_ = !prior.empty();
   const bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
   moving_.clear();
   if (detect && tracked) leave_out_moving(frame, keyframe_pose, record);
@@ -154,8 +158,7 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
   const Eigen::Isometry3d T_world_reference = keyframe_pose(reference->keyframe);
   const Eigen::Isometry3d T_cur_ref = record.T_world_cam.inverse() * T_world_reference;
   // Found on the frame as prepared without any regions left out: the prior's pixels are judged too.
-  const std::shared_ptr<const tracking::OdometryFrame> whole =
-      last_prepared_->levels().back().ignore.empty() ? last_prepared_ : prepare(frame, {});
+  const std::shared_ptr<const tracking::OdometryFrame> whole = prior_used_ ? prepare(frame, {}) : last_prepared_;
   std::vector<uint8_t> labels =
       tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
   const auto moving = static_cast<std::size_t>(std::count(labels.begin(), labels.end(), tracking::kArrived));

@@ -143,6 +143,7 @@ class FrameTracker {
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
   std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
   int moving_factor_ = 1;
+  bool prior_used_ = false;  // last_prepared_ left out the previous frame's regions
 };
 
 }  // namespace app

@@ -48,7 +48,9 @@ void MovingMask::apply(splat::RgbdFrame& frame) const {
   labels.reserve(static_cast<std::size_t>(width) * height);
   for (std::size_t k = 0; k < runs.size(); ++k) labels.insert(labels.end(), runs[k], k % 2 ? 1 : 0);
   labels.resize(static_cast<std::size_t>(width) * height, 0);
-  frame.ignore = upsample_labels(labels, width, factor, frame.width(), frame.height());
+  const std::vector<uint8_t> spread = upsample_labels(labels, width, factor, frame.width(), frame.height());
+  if (frame.ignore.empty()) frame.ignore.assign(spread.size(), 0);
+  for (std::size_t i = 0; i < spread.size(); ++i) frame.ignore[i] |= spread[i];
 }
 
 }  // namespace app

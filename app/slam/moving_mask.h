@@ -18,7 +18,7 @@ struct MovingMask {
 
   // From tracking::MovingLabel labels (width x height = labels.size()); empty if none arrived.
   static MovingMask arrivals(const std::vector<uint8_t>& labels, int width, int factor);
-  // The frame with its left-out pixels ignored (splat::RgbdFrame::ignore); unchanged if empty.
+  // Adds the left-out pixels to the frame's ignored ones (splat::RgbdFrame::ignore).
   // Throws splat::Error if the frame is not `factor` times the labels' size.
   void apply(splat::RgbdFrame& frame) const;
 };

@@ -9,8 +9,8 @@ namespace splat {
 RgbdFrame downsample(const RgbdFrame& f, int factor) {
   if (factor < 1) throw Error("downsample: factor is " + std::to_string(factor) + ", expected >= 1");
   const std::size_t pixels = static_cast<std::size_t>(f.width()) * f.height();
-  if (!f.ignore.empty() && f.ignore.size() != pixels) {
-    throw Error("downsample: the frame's ignore mask does not match its " + std::to_string(f.width()) + "x" +
+  if ((!f.ignore.empty() && f.ignore.size() != pixels) || (!f.labels.empty() && f.labels.size() != pixels)) {
+    throw Error("downsample: the frame's ignore mask or labels do not match its " + std::to_string(f.width()) + "x" +
                 std::to_string(f.height()) + " camera");
   }
   if (factor == 1) return f;
@@ -29,6 +29,7 @@ RgbdFrame downsample(const RgbdFrame& f, int factor) {
   out.depth.assign(static_cast<std::size_t>(w) * h, 0.f);
   const bool ignoring = !f.ignore.empty();
   if (ignoring) out.ignore.assign(static_cast<std::size_t>(w) * h, 0);
+  if (!f.labels.empty()) out.labels.assign(static_cast<std::size_t>(w) * h, 0);
   const float inv_area = 1.f / static_cast<float>(factor * factor);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
@@ -50,6 +51,7 @@ RgbdFrame downsample(const RgbdFrame& f, int factor) {
       for (int c = 0; c < 3; ++c) out.rgb[o * 3 + c] = rgb[c] * inv_area;
       out.depth[o] = valid > 0 ? depth / static_cast<float>(valid) : 0.f;
       if (ignoring) out.ignore[o] = ignored;
+      if (!f.labels.empty()) out.labels[o] = f.labels[static_cast<std::size_t>(y * factor) * f.width() + x * factor];
     }
   }
   return out;

@@ -17,12 +17,14 @@ struct RgbdFrame {
   // [H, W] or empty (none): non-zero where the pixel shows no part of the static scene (a moving
   // object), left out of tracking and mapping.
   std::vector<uint8_t> ignore;
+  // [H, W] or empty (none): class ids from a segmenter, 0 = unknown.
+  std::vector<uint16_t> labels;
   int width() const { return camera.width; }
   int height() const { return camera.height; }
 };
 
 // The frame at 1/factor resolution: colour averaged over each block, depth averaged over its
-// valid pixels (0 if none), a block ignored if any of its pixels is, intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
+// valid pixels (0 if none), a block ignored if any of its pixels is, labelled as its first pixel, intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
 // round down.
 RgbdFrame downsample(const RgbdFrame& frame, int factor);
 
