@@ -75,6 +75,11 @@ int run_eval(const EvalOptions& o) {
   if (options.intrinsics.empty()) options.intrinsics = recorded.options.intrinsics;
   if (!(options.depth_scale > 0)) options.depth_scale = recorded.options.depth_scale;
   if (options.max_frames == 0) options.max_frames = recorded.options.max_frames;
+  if (o.dataset.empty()) {  // a recording's topics and /tf frames, as the run read it
+    if (options.color_topic.empty()) options.color_topic = recorded.options.color_topic;
+    if (options.depth_topic.empty()) options.depth_topic = recorded.options.depth_topic;
+    if (options.gt_frames.empty()) options.gt_frames = recorded.options.gt_frames;
+  }
   const Dataset dataset = open_dataset(dataset_path, options);
   if (!dataset.has_ground_truth()) throw splat::Error(dataset_path.string() + ": the dataset has no ground truth");
   const std::vector<StampedPose> estimate = read_tum_trajectory(o.run / "trajectory.txt");

@@ -30,6 +30,9 @@ RecordedInput recorded_input(const nlohmann::json& in, const std::string& where)
     r.options.intrinsics = text;
     r.options.depth_scale = in.at("depth_scale").get<double>();
     r.options.max_frames = in.value("max_frames", 0);
+    r.options.color_topic = in.value("color_topic", "");
+    r.options.depth_topic = in.value("depth_topic", "");
+    r.options.gt_frames = in.value("gt_frames", "");
     r.config = in.value("config", nlohmann::json());
     r.test_every = in.value("test_every", 0);
     if (r.test_every < 0) throw splat::Error(where + ": \"input\".test_every is negative");

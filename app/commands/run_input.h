@@ -17,9 +17,15 @@ namespace app {
 // folder a camera driver wrote), their camera and depth units, and the settings of the run.
 nlohmann::json run_input_json(const std::filesystem::path& input, const std::string& format, const splat::Camera& k,
                               double depth_scale, int max_frames, int test_every, const SlamConfig& config);
+// With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames").
 inline nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
                                      int test_every, const SlamConfig& config) {
-  return run_input_json(input, dataset.format, dataset.intrinsics, dataset.depth_scale, max_frames, test_every, config);
+  nlohmann::json out =
+      run_input_json(input, dataset.format, dataset.intrinsics, dataset.depth_scale, max_frames, test_every, config);
+  if (!dataset.color_topic.empty()) out["color_topic"] = dataset.color_topic;
+  if (!dataset.depth_topic.empty()) out["depth_topic"] = dataset.depth_topic;
+  if (!dataset.gt_frames.empty()) out["gt_frames"] = dataset.gt_frames;
+  return out;
 }
 
 // --test-every N: frame i (counted from 0) is a held-out test view when (i + 1) % N == 0, so the
@@ -30,7 +36,7 @@ inline bool is_held_out(std::size_t frame, int test_every) {
 
 struct RecordedInput {
   std::filesystem::path dataset;
-  DatasetOptions options;  // intrinsics as --intrinsics takes them, depth scale, max frames
+  DatasetOptions options;  // intrinsics as --intrinsics takes them, depth scale, max frames, a recording's topics
   nlohmann::json config;   // null where the run did not record it
   int test_every = 0;      // held-out test views (is_held_out)
 };

@@ -281,6 +281,9 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
                    " (gslam needs depth registered to colour)");
   }
   d.store = std::make_shared<BagFrameStore>(bag, colour.topic, depth.topic, pairs);
+  d.color_topic = colour.topic;
+  d.depth_topic = depth.topic;
+  d.gt_frames = options.gt_frames;
   if (!options.gt_frames.empty()) attach_tf_ground_truth(d, *bag, options.gt_frames);
   return d;
 }

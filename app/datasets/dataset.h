@@ -62,6 +62,9 @@ struct Dataset {
   // Real problems found while opening (ground truth matching no frame, most colour images
   // without depth, fewer Replica poses than frames), one line each, for the caller to print.
   std::vector<std::string> warnings;
+  // A ROS recording's colour and depth topics as read, and --gt-frames; recorded in a run's
+  // summary.json so that eval and --resume read the same frames.
+  std::string color_topic, depth_topic, gt_frames;
 
   // "193 frames used (of 2406 listed; 2206 have no colour image here, 7 no depth within 0.02 s)",
   // or "193 frames" when every listed frame is used.

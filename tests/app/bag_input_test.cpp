@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "app/run_gslam.h"
 #include "datasets/bag_reader.h"
@@ -250,7 +251,8 @@ double trajectory_difference(const std::filesystem::path& a, const std::filesyst
 
 // Reconstructs the folder and the recording (kFrames frames; 10 in sanitized builds, which run
 // some 20x slower) and compares their trajectories; evaluates the recording's run, ground truth
-// coming from groundtruth.txt beside it.
+// coming from /tf (--gt-frames, recorded in the run's summary.json with the topics, so that eval
+// needs no options).
 void expect_same_reconstruction(const std::filesystem::path& recording, const TempDir& dir) {
   gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
   const int frames = gslam::test::test_time_scale() > 1 ? 10 : kFrames;
@@ -258,8 +260,13 @@ void expect_same_reconstruction(const std::filesystem::path& recording, const Te
   const auto folder = run_gslam("reconstruct " + gslam::test::shared_data(kTeddy).string() + " --out " +
                                 (dir / "folder_run").string() + common);
   ASSERT_EQ(folder.exit_code, 0) << folder.output;
-  const auto bag = run_gslam("reconstruct " + recording.string() + " --out " + (dir / "bag_run").string() + common);
+  const auto bag = run_gslam("reconstruct " + recording.string() + " --out " + (dir / "bag_run").string() + common +
+                             " --color-topic /camera/rgb/image_color --gt-frames world,kinect");
   ASSERT_EQ(bag.exit_code, 0) << bag.output;
+  const nlohmann::json input = nlohmann::json::parse(gslam::test::read_text(dir / "bag_run" / "summary.json"))["input"];
+  EXPECT_EQ(input.value("color_topic", ""), "/camera/rgb/image_color") << input.dump();
+  EXPECT_EQ(input.value("depth_topic", ""), "/camera/depth/image") << input.dump();
+  EXPECT_EQ(input.value("gt_frames", ""), "world,kinect") << input.dump();
   const double difference = trajectory_difference(dir / "folder_run" / "trajectory.txt", dir / "bag_run" / "trajectory.txt");
   EXPECT_LT(difference, kTrajectoryTolerance) << "metres";
   std::printf("bag vs folder trajectory: largest position difference %.3g m over %d frames\n", difference, frames);
