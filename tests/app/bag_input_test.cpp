@@ -153,7 +153,7 @@ void write_bytes(const std::filesystem::path& path, const std::vector<std::uint8
 
 struct McapSpec {
   std::string compression = "zstd";
-  std::string colour_encoding = "bgr8";
+  std::string colour_encoding = "bgr8";  // or "png": sensor_msgs/CompressedImage
   std::string depth_encoding = "32FC1";  // or 16UC1 (the PNG's values)
   bool depth = true, camera_info = true;
   bool tf = false;  // mocap() on /tf and the mount on /tf_static
@@ -169,7 +169,11 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const st
     const app::DatasetEntry& e = folder.entries[std::size_t(i)];
     const splat::RgbdFrame f = folder.load(std::size_t(i));
     const std::string c = std::to_string(i) + ".colour", d = std::to_string(i) + ".depth";
-    write_bytes(raw / c, colour_bytes(f, spec.colour_encoding == "bgr8"));
+    if (spec.colour_encoding == "png") {  // a CompressedImage holding the folder's PNG file
+      std::filesystem::copy_file(e.rgb, raw / c);
+    } else {
+      write_bytes(raw / c, colour_bytes(f, spec.colour_encoding == "bgr8"));
+    }
     write_bytes(raw / d, spec.depth_encoding == "32FC1" ? float_bytes(f.depth) : png_bytes(e.depth));
     const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
     frames << (i ? "," : "") << R"({"colour": ")" << c << R"(", "colour_stamp": [)" << ct[0] << "," << ct[1]
@@ -317,6 +321,16 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   expect_tf_ground_truth(folder, mcap, kFrames);
   expect_same_reconstruction(mcap, dir);
   expect_live_replay(mcap, dir);
+}
+
+TEST_F(McapInput, CompressedPngColourDecodesAsTheFile) {
+  TempDir dir;
+  const app::Dataset folder = open_teddy(3);
+  McapSpec spec;
+  spec.colour_encoding = "png";
+  spec.frames = 3;
+  write_teddy_mcap(folder, spec, dir / "teddy.mcap");
+  expect_same_frames(folder, app::open_dataset(dir / "teddy.mcap"), 3);
 }
 
 TEST_F(McapInput, Lz4ChunksAnd16BitDepth) {
