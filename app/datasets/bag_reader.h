@@ -15,9 +15,10 @@ namespace app {
 
 // sensor_msgs/Image or sensor_msgs/CompressedImage as recorded.
 struct RosImage {
-  double stamp = 0;         // header.stamp, seconds
-  std::string encoding;     // Image: "rgb8", "16UC1", ...; CompressedImage: its format ("png", "jpeg", ...)
-  bool compressed = false;  // a CompressedImage
+  double stamp = 0;  // header.stamp, seconds
+  std::string
+      encoding;  // Image: "rgb8", "16UC1", ...; CompressedImage: its format ("png", "jpeg", ...)
+  bool compressed = false;                        // a CompressedImage
   std::uint32_t width = 0, height = 0, step = 0;  // Image only; step in bytes per row
   bool big_endian = false;                        // Image only
   std::vector<std::uint8_t> data;  // [height, step] rows or the compressed file; empty in an index
@@ -58,8 +59,8 @@ class BagReader {
   virtual RosImage read_image(const std::string& topic, std::size_t k) const = 0;
   // The first CameraInfo message on `topic`; nullopt when it has none.
   virtual std::optional<RosCameraInfo> camera_info(const std::string& topic) const = 0;
-  // Every transform of the TFMessage topics (/tf, /tf_static), each topic's in recording order. Throws
-  // splat::Error naming the file for a malformed message.
+  // Every transform of the TFMessage topics (/tf, /tf_static), each topic's in recording order.
+  // Throws splat::Error naming the file for a malformed message.
   virtual std::vector<RosTransform> transforms() const = 0;
 };
 

@@ -43,7 +43,8 @@ class RecordCursor {
  public:
   explicit RecordCursor(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
   std::span<const std::uint8_t> take(std::uint64_t n, const char* field) {
-    if (n > bytes_.size() - pos_) throw Malformed{std::string(field) + " runs past the end of its record"};
+    if (n > bytes_.size() - pos_)
+      throw Malformed{std::string(field) + " runs past the end of its record"};
     const auto out = bytes_.subspan(pos_, static_cast<std::size_t>(n));
     pos_ += static_cast<std::size_t>(n);
     return out;
@@ -77,8 +78,8 @@ class MessageCursor {
     if (bytes_.size() < 4) throw Malformed{"shorter than its CDR encapsulation header"};
     // 0x0000 CDR big-endian, 0x0001 CDR little-endian; parameter lists and XCDR2 are not ROS 2's.
     if (bytes_[0] != 0 || bytes_[1] > 1) {
-      throw Malformed{"CDR encapsulation " + std::to_string(bytes_[0]) + "," + std::to_string(bytes_[1]) +
-                      " (expected plain CDR, 0,1 or 0,0)"};
+      throw Malformed{"CDR encapsulation " + std::to_string(bytes_[0]) + "," +
+                      std::to_string(bytes_[1]) + " (expected plain CDR, 0,1 or 0,0)"};
     }
     big_endian_ = bytes_[1] == 0;
     pos_ = base_ = 4;
@@ -86,7 +87,8 @@ class MessageCursor {
   bool big_endian() const { return big_endian_; }
   std::size_t pos() const { return pos_; }
   std::span<const std::uint8_t> take(std::uint64_t n, const char* field) {
-    if (n > bytes_.size() - pos_) throw Malformed{std::string(field) + " runs past the end of the message"};
+    if (n > bytes_.size() - pos_)
+      throw Malformed{std::string(field) + " runs past the end of the message"};
     const auto out = bytes_.subspan(pos_, static_cast<std::size_t>(n));
     pos_ += static_cast<std::size_t>(n);
     return out;
@@ -149,8 +151,9 @@ RosImage parse_image(std::span<const std::uint8_t> bytes, bool ros1, Kind kind, 
   }
   const std::uint32_t n = c.number<std::uint32_t>("data length");
   if (std::uint64_t(c.pos()) + n > message_bytes) {
-    throw Malformed{"image data of " + std::to_string(n) + " bytes runs past the end of the message (" +
-                    std::to_string(message_bytes) + " bytes)"};
+    throw Malformed{"image data of " + std::to_string(n) +
+                    " bytes runs past the end of the message (" + std::to_string(message_bytes) +
+                    " bytes)"};
   }
   if (with_data) {
     const auto data = c.take(n, "data");
@@ -167,7 +170,8 @@ RosCameraInfo parse_camera_info(std::span<const std::uint8_t> bytes, bool ros1) 
   info.width = c.number<std::uint32_t>("width");
   c.string("distortion_model");
   const std::uint32_t d = c.number<std::uint32_t>("d length");
-  if (d > 64) throw Malformed{"d has " + std::to_string(d) + " distortion coefficients (at most 64)"};
+  if (d > 64)
+    throw Malformed{"d has " + std::to_string(d) + " distortion coefficients (at most 64)"};
   for (std::uint32_t i = 0; i < d; ++i) c.number<double>("d");
   for (double& k : info.k) k = c.number<double>("k");
   return info;
@@ -179,12 +183,14 @@ std::vector<RosTransform> parse_tf(std::span<const std::uint8_t> bytes, bool ros
   MessageCursor c(bytes, ros1);
   const std::uint32_t n = c.number<std::uint32_t>("transforms length");
   // Each transform takes at least 56 bytes of float64s: a count beyond that is malformed.
-  if (std::uint64_t(n) * 56 > bytes.size()) throw Malformed{"transforms length " + std::to_string(n) + " exceeds the message"};
+  if (std::uint64_t(n) * 56 > bytes.size())
+    throw Malformed{"transforms length " + std::to_string(n) + " exceeds the message"};
   const auto frame = [](std::string id) { return id.empty() || id[0] != '/' ? id : id.substr(1); };
   std::vector<RosTransform> out(n);
   for (RosTransform& t : out) {
     if (ros1) c.number<std::uint32_t>("header.seq");
-    const double sec = ros1 ? double(c.number<std::uint32_t>("header.stamp.sec")) : double(c.number<std::int32_t>("header.stamp.sec"));
+    const double sec = ros1 ? double(c.number<std::uint32_t>("header.stamp.sec"))
+                            : double(c.number<std::int32_t>("header.stamp.sec"));
     t.stamp = sec + double(c.number<std::uint32_t>("header.stamp.nanosec")) / 1e9;
     t.parent = frame(c.string("header.frame_id"));
     t.child = frame(c.string("child_frame_id"));
@@ -226,12 +232,16 @@ class File {
   // Bytes [offset, offset + n), n checked against the file size by the caller. pread: no shared
   // position, so threads may read at once.
   std::vector<std::uint8_t> read(std::uint64_t offset, std::uint64_t n) const {
-    if (offset > size_ || n > size_ - offset) fail(path_, "read past the end of the file at byte " + std::to_string(offset));
+    if (offset > size_ || n > size_ - offset)
+      fail(path_, "read past the end of the file at byte " + std::to_string(offset));
     std::vector<std::uint8_t> out(static_cast<std::size_t>(n));
     std::size_t done = 0;
     while (done < out.size()) {
-      const ssize_t got = ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
-      if (got <= 0) fail(path_, "cannot read " + std::to_string(n) + " bytes at byte " + std::to_string(offset));
+      const ssize_t got =
+          ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
+      if (got <= 0)
+        fail(path_,
+             "cannot read " + std::to_string(n) + " bytes at byte " + std::to_string(offset));
       done += static_cast<std::size_t>(got);
     }
     return out;
@@ -317,21 +327,26 @@ class McapReader final : public BagReader {
       fail(path_, "not an MCAP file (it does not start with the MCAP magic)");
     }
     if (size < 16 || std::memcmp(file_.read(size - 8, 8).data(), kMagic, 8) != 0) {
-      fail(path_, "truncated MCAP file (it does not end with the MCAP magic; still being recorded, or cut off)");
+      fail(path_,
+           "truncated MCAP file (it does not end with the MCAP magic; still being recorded, or cut "
+           "off)");
     }
     std::uint64_t pos = 8;
     while (true) {
-      if (size - 8 - pos < 9) malformed(pos, "truncated: no room for a record header before the closing magic");
+      if (size - 8 - pos < 9)
+        malformed(pos, "truncated: no room for a record header before the closing magic");
       const std::vector<std::uint8_t> head = file_.read(pos, 9);
       const std::uint8_t opcode = head[0];
       std::uint64_t length;
       std::memcpy(&length, head.data() + 1, 8);
       const std::uint64_t body = pos + 9;
       if (length > size - 8 - body) {
-        malformed(pos, "truncated: opcode " + std::to_string(opcode) + " record of " + std::to_string(length) +
-                           " bytes runs past the end of the file (" + std::to_string(size) + " bytes)");
+        malformed(pos, "truncated: opcode " + std::to_string(opcode) + " record of " +
+                           std::to_string(length) + " bytes runs past the end of the file (" +
+                           std::to_string(size) + " bytes)");
       }
-      if (opcode == kFooter || opcode == kDataEnd) break;  // the summary repeats what the data section had
+      if (opcode == kFooter || opcode == kDataEnd)
+        break;  // the summary repeats what the data section had
       try {
         record(opcode, body, length);
       } catch (const Malformed& e) {
@@ -344,7 +359,8 @@ class McapReader final : public BagReader {
   std::vector<std::uint8_t> read_small(std::uint64_t offset, std::uint64_t length) const {
     if (length > kMaxMcapSmallRecordBytes) {
       throw Malformed{"record of " + std::to_string(length) + " bytes, more than the " +
-                      std::to_string(kMaxMcapSmallRecordBytes) + " a schema, channel or camera info may have"};
+                      std::to_string(kMaxMcapSmallRecordBytes) +
+                      " a schema, channel or camera info may have"};
     }
     return file_.read(offset, length);
   }
@@ -359,7 +375,8 @@ class McapReader final : public BagReader {
         break;
       }
       case kMessage: {
-        const std::vector<std::uint8_t> bytes = file_.read(body, std::min(length, kImageHeaderBytes + 22));
+        const std::vector<std::uint8_t> bytes =
+            file_.read(body, std::min(length, kImageHeaderBytes + 22));
         message(bytes, length, kNoChunk, body);
         break;
       }
@@ -385,7 +402,9 @@ class McapReader final : public BagReader {
     ch.encoding = c.string("channel message encoding");
     if (schema != 0) {
       const auto s = schemas_.find(schema);
-      if (s == schemas_.end()) throw Malformed{"channel " + ch.topic + " names schema " + std::to_string(schema) + ", not defined before it"};
+      if (s == schemas_.end())
+        throw Malformed{"channel " + ch.topic + " names schema " + std::to_string(schema) +
+                        ", not defined before it"};
       ch.type = s->second;
     }
     ch.kind = kind_of(ch.type);
@@ -398,25 +417,33 @@ class McapReader final : public BagReader {
 
   // A Message record: `bytes` holds at least its fields and the start of its data (all of it in
   // a chunk); `length` is the whole record's.
-  void message(std::span<const std::uint8_t> bytes, std::uint64_t length, std::uint64_t chunk, std::uint64_t body) {
+  void message(std::span<const std::uint8_t> bytes, std::uint64_t length, std::uint64_t chunk,
+               std::uint64_t body) {
     RecordCursor c(bytes);
     const auto channel_id = c.number<std::uint16_t>("message channel id");
     c.number<std::uint32_t>("message sequence");
     const auto log_time = c.number<std::uint64_t>("message log time");
     c.number<std::uint64_t>("message publish time");
     const auto ch = channels_.find(channel_id);
-    if (ch == channels_.end()) throw Malformed{"message on channel " + std::to_string(channel_id) + ", not defined before it"};
+    if (ch == channels_.end())
+      throw Malformed{"message on channel " + std::to_string(channel_id) +
+                      ", not defined before it"};
     Channel& channel = ch->second;
     ++channel.messages;
     const bool ros1 = channel.encoding == "ros1";
     const std::uint64_t data_length = length - c.pos();
     try {
       if (channel.kind == Kind::kImage || channel.kind == Kind::kCompressedImage) {
-        Indexed m{parse_image(c.rest(), ros1, channel.kind, false, data_length), channel.kind, ros1, chunk,
-                  body + c.pos(), data_length};
+        Indexed m{parse_image(c.rest(), ros1, channel.kind, false, data_length),
+                  channel.kind,
+                  ros1,
+                  chunk,
+                  body + c.pos(),
+                  data_length};
         if (m.header.stamp == 0) m.header.stamp = double(log_time) / 1e9;
         images_[channel.topic].push_back(std::move(m));
-      } else if ((channel.kind == Kind::kCameraInfo && !camera_infos_.count(channel.topic)) || channel.kind == Kind::kTf) {
+      } else if ((channel.kind == Kind::kCameraInfo && !camera_infos_.count(channel.topic)) ||
+                 channel.kind == Kind::kTf) {
         std::vector<std::uint8_t> whole;
         std::span<const std::uint8_t> data = c.rest();
         if (data.size() < data_length) {  // outside a chunk only the start was read
@@ -426,12 +453,14 @@ class McapReader final : public BagReader {
         if (channel.kind == Kind::kCameraInfo) {
           camera_infos_[channel.topic] = parse_camera_info(data, ros1);
         } else {
-          const auto tf = parse_tf(data, ros1, channel.topic == "/tf_static" || channel.topic == "tf_static");
+          const auto tf =
+              parse_tf(data, ros1, channel.topic == "/tf_static" || channel.topic == "tf_static");
           transforms_.insert(transforms_.end(), tf.begin(), tf.end());
         }
       }
     } catch (const Malformed& e) {
-      throw Malformed{"message " + std::to_string(channel.messages - 1) + " on " + channel.topic + ": " + e.what};
+      throw Malformed{"message " + std::to_string(channel.messages - 1) + " on " + channel.topic +
+                      ": " + e.what};
     }
   }
 
@@ -447,12 +476,13 @@ class McapReader final : public BagReader {
     const auto compressed = c.number<std::uint64_t>("chunk records length");
     const std::uint64_t start = body + c.pos();
     if (compressed > length - c.pos()) {
-      throw Malformed{"chunk records of " + std::to_string(compressed) + " bytes run past the chunk (" +
-                      std::to_string(length) + " bytes)"};
+      throw Malformed{"chunk records of " + std::to_string(compressed) +
+                      " bytes run past the chunk (" + std::to_string(length) + " bytes)"};
     }
     if (uncompressed > kMaxMcapChunkBytes) {
-      throw Malformed{"chunk of " + std::to_string(uncompressed) + " bytes uncompressed, more than the " +
-                      std::to_string(kMaxMcapChunkBytes) + " gslam reads"};
+      throw Malformed{"chunk of " + std::to_string(uncompressed) +
+                      " bytes uncompressed, more than the " + std::to_string(kMaxMcapChunkBytes) +
+                      " gslam reads"};
     }
     if (compression != "" && compression != "zstd" && compression != "lz4") {
       throw Malformed{"chunk compression '" + compression + "' (gslam reads none, zstd, lz4)"};
@@ -466,19 +496,23 @@ class McapReader final : public BagReader {
     std::vector<std::uint8_t> out(static_cast<std::size_t>(uncompressed));
     if (compression == "zstd") {
       const std::size_t got = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
-      if (ZSTD_isError(got)) throw Malformed{std::string("zstd chunk does not decompress: ") + ZSTD_getErrorName(got)};
+      if (ZSTD_isError(got))
+        throw Malformed{std::string("zstd chunk does not decompress: ") + ZSTD_getErrorName(got)};
       if (got != out.size()) {
-        throw Malformed{"zstd chunk decompresses to " + std::to_string(got) + " bytes, expected " + std::to_string(out.size())};
+        throw Malformed{"zstd chunk decompresses to " + std::to_string(got) + " bytes, expected " +
+                        std::to_string(out.size())};
       }
       return out;
     }
     LZ4F_dctx* dctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&dctx, LZ4F_VERSION))) throw Malformed{"lz4: out of memory"};
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&dctx, LZ4F_VERSION)))
+      throw Malformed{"lz4: out of memory"};
     std::size_t in_pos = 0, out_pos = 0;
     std::size_t status = 1;
     while (status != 0 && in_pos < in.size()) {
       std::size_t in_n = in.size() - in_pos, out_n = out.size() - out_pos;
-      status = LZ4F_decompress(dctx, out.data() + out_pos, &out_n, in.data() + in_pos, &in_n, nullptr);
+      status =
+          LZ4F_decompress(dctx, out.data() + out_pos, &out_n, in.data() + in_pos, &in_n, nullptr);
       if (LZ4F_isError(status)) {
         LZ4F_freeDecompressionContext(dctx);
         throw Malformed{std::string("lz4 chunk does not decompress: ") + LZ4F_getErrorName(status)};
@@ -489,8 +523,8 @@ class McapReader final : public BagReader {
     }
     LZ4F_freeDecompressionContext(dctx);
     if (status != 0 || out_pos != out.size()) {
-      throw Malformed{"lz4 chunk decompresses to " + std::to_string(out_pos) + "+ bytes, expected " +
-                      std::to_string(out.size())};
+      throw Malformed{"lz4 chunk decompresses to " + std::to_string(out_pos) +
+                      "+ bytes, expected " + std::to_string(out.size())};
     }
     return out;
   }
@@ -504,10 +538,11 @@ class McapReader final : public BagReader {
       std::uint64_t n;
       std::memcpy(&n, records.data() + pos + 1, 8);
       if (n > records.size() - pos - 9) {
-        throw Malformed{"chunk record at offset " + std::to_string(pos) + " of " + std::to_string(n) +
-                        " bytes runs past the chunk"};
+        throw Malformed{"chunk record at offset " + std::to_string(pos) + " of " +
+                        std::to_string(n) + " bytes runs past the chunk"};
       }
-      const std::span<const std::uint8_t> content(records.data() + pos + 9, static_cast<std::size_t>(n));
+      const std::span<const std::uint8_t> content(records.data() + pos + 9,
+                                                  static_cast<std::size_t>(n));
       if (opcode == kSchema || opcode == kChannel) definition(opcode, content);
       if (opcode == kMessage) message(content, n, body, pos + 9);
       pos += 9 + n;
@@ -530,7 +565,8 @@ class McapReader final : public BagReader {
       }
       cached_chunk_ = m.chunk;
     }
-    if (m.offset > cached_.size() || m.length > cached_.size() - m.offset) malformed(m.chunk - 9, "chunk changed since it was indexed");
+    if (m.offset > cached_.size() || m.length > cached_.size() - m.offset)
+      malformed(m.chunk - 9, "chunk changed since it was indexed");
     return std::span<const std::uint8_t>(cached_).subspan(static_cast<std::size_t>(m.offset),
                                                           static_cast<std::size_t>(m.length));
   }
@@ -550,6 +586,8 @@ class McapReader final : public BagReader {
 
 }  // namespace
 
-std::unique_ptr<BagReader> open_mcap(const std::filesystem::path& path) { return std::make_unique<McapReader>(path); }
+std::unique_ptr<BagReader> open_mcap(const std::filesystem::path& path) {
+  return std::make_unique<McapReader>(path);
+}
 
 }  // namespace app

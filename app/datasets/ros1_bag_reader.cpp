@@ -3,15 +3,15 @@
 #include "io/file_error.h"
 
 #ifdef GSLAM_HAVE_ROS1
-#include <map>
-#include <mutex>
-
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_msgs/TFMessage.h>
+
+#include <map>
+#include <mutex>
 #endif
 
 namespace app {
@@ -52,7 +52,8 @@ class Ros1BagReader final : public BagReader {
     guarded([&] {
       bag_.open(path.string(), rosbag::bagmode::Read);
       rosbag::View all(bag_);
-      for (const rosbag::ConnectionInfo* c : all.getConnections()) topics_[c->topic].type = c->datatype;
+      for (const rosbag::ConnectionInfo* c : all.getConnections())
+        topics_[c->topic].type = c->datatype;
       for (auto& [name, topic] : topics_) {
         topic.name = name;
         topic.messages = rosbag::View(bag_, rosbag::TopicQuery(name)).size();
@@ -84,7 +85,9 @@ class Ros1BagReader final : public BagReader {
   std::vector<RosTransform> transforms() const override {
     std::lock_guard lock(mutex_);
     std::vector<RosTransform> out;
-    const auto frame = [](const std::string& id) { return id.empty() || id[0] != '/' ? id : id.substr(1); };
+    const auto frame = [](const std::string& id) {
+      return id.empty() || id[0] != '/' ? id : id.substr(1);
+    };
     guarded([&] {
       for (const auto& [name, topic] : topics_) {
         // tf/tfMessage has tf2_msgs/TFMessage's definition and MD5, so one type reads both.
@@ -98,8 +101,10 @@ class Ros1BagReader final : public BagReader {
             r.stamp = seconds(t.header.stamp, m.getTime());
             r.parent = frame(t.header.frame_id);
             r.child = frame(t.child_frame_id);
-            r.translation = {t.transform.translation.x, t.transform.translation.y, t.transform.translation.z};
-            r.rotation = {t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w};
+            r.translation = {t.transform.translation.x, t.transform.translation.y,
+                             t.transform.translation.z};
+            r.rotation = {t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z,
+                          t.transform.rotation.w};
             r.is_static = name == "/tf_static";
             out.push_back(r);
           }
@@ -129,7 +134,8 @@ class Ros1BagReader final : public BagReader {
 
  private:
   struct Index {
-    std::vector<rosbag::MessageInstance> messages;  // point into bag_'s index, valid while it is open
+    std::vector<rosbag::MessageInstance>
+        messages;  // point into bag_'s index, valid while it is open
     std::vector<RosImage> headers;
   };
 
@@ -184,8 +190,10 @@ bool ros1_bag_supported() { return true; }
 #else
 
 std::unique_ptr<BagReader> open_ros1_bag(const std::filesystem::path& path) {
-  fail(path, "this gslam was built without ROS 1 (rosbag): install librosbag-dev libsensor-msgs-dev (scripts/install_deps.sh) "
-             "and rebuild, or convert the bag to MCAP");
+  fail(path,
+       "this gslam was built without ROS 1 (rosbag): install librosbag-dev libsensor-msgs-dev "
+       "(scripts/install_deps.sh) "
+       "and rebuild, or convert the bag to MCAP");
 }
 bool ros1_bag_supported() { return false; }
 

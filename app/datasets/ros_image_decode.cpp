@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -12,7 +11,9 @@
 namespace app {
 namespace {
 
-[[noreturn]] void fail_at(const std::string& where, const std::string& what) { throw splat::Error(where + ": " + what); }
+[[noreturn]] void fail_at(const std::string& where, const std::string& what) {
+  throw splat::Error(where + ": " + what);
+}
 
 int bytes_per_pixel(const std::string& encoding) {
   if (encoding == "rgb8" || encoding == "bgr8" || encoding == "8UC3") return 3;
@@ -31,18 +32,20 @@ void check_layout(const RosImage& image, int pixel_bytes, const std::string& whe
   }
   const std::uint64_t row = std::uint64_t(image.width) * std::uint64_t(pixel_bytes);
   if (image.step < row) {
-    fail_at(where, "step " + std::to_string(image.step) + " is less than width " + std::to_string(image.width) +
-                       " x " + std::to_string(pixel_bytes) + " bytes (" + image.encoding + ")");
+    fail_at(where, "step " + std::to_string(image.step) + " is less than width " +
+                       std::to_string(image.width) + " x " + std::to_string(pixel_bytes) +
+                       " bytes (" + image.encoding + ")");
   }
   const std::uint64_t needed = std::uint64_t(image.step) * image.height;
   if (image.data.size() < needed) {
-    fail_at(where, "image data has " + std::to_string(image.data.size()) + " bytes, expected step x height = " +
-                       std::to_string(needed));
+    fail_at(where, "image data has " + std::to_string(image.data.size()) +
+                       " bytes, expected step x height = " + std::to_string(needed));
   }
 }
 
 std::string encodings_read() {
-  return "colour rgb8, bgr8, rgba8, bgra8, mono8 or a PNG/JPEG CompressedImage; depth 16UC1 (mm) or 32FC1 (m)";
+  return "colour rgb8, bgr8, rgba8, bgra8, mono8 or a PNG/JPEG CompressedImage; depth 16UC1 (mm) "
+         "or 32FC1 (m)";
 }
 
 }  // namespace
@@ -54,7 +57,8 @@ bool is_colour_encoding(const RosImage& h) {
 }
 
 bool is_depth_encoding(const RosImage& h) {
-  return !h.compressed && (h.encoding == "16UC1" || h.encoding == "mono16" || h.encoding == "32FC1");
+  return !h.compressed &&
+         (h.encoding == "16UC1" || h.encoding == "mono16" || h.encoding == "32FC1");
 }
 
 double default_depth_scale(const RosImage& h) { return h.encoding == "32FC1" ? 1.0 : 1000.0; }
@@ -62,7 +66,8 @@ double default_depth_scale(const RosImage& h) { return h.encoding == "32FC1" ? 1
 splat::Image8 decode_colour(const RosImage& image, const std::string& where) {
   if (image.compressed) {
     if (image.data.size() > (std::size_t(1) << 30)) fail_at(where, "compressed image over 1 GiB");
-    const cv::Mat bytes(1, static_cast<int>(image.data.size()), CV_8UC1, const_cast<std::uint8_t*>(image.data.data()));
+    const cv::Mat bytes(1, static_cast<int>(image.data.size()), CV_8UC1,
+                        const_cast<std::uint8_t*>(image.data.data()));
     cv::Mat decoded;
     try {
       decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);  // BGR, 8-bit
@@ -70,7 +75,8 @@ splat::Image8 decode_colour(const RosImage& image, const std::string& where) {
       fail_at(where, "compressed image (" + image.encoding + ") does not decode: " + e.what());
     }
     if (decoded.empty() || decoded.type() != CV_8UC3) {
-      fail_at(where, "compressed image (format '" + image.encoding + "') does not decode as PNG or JPEG colour");
+      fail_at(where, "compressed image (format '" + image.encoding +
+                         "') does not decode as PNG or JPEG colour");
     }
     if (!image_size_allowed(std::uint64_t(decoded.cols), std::uint64_t(decoded.rows))) {
       fail_at(where, "image over " + std::string(kImageSizeLimit));
@@ -85,7 +91,8 @@ splat::Image8 decode_colour(const RosImage& image, const std::string& where) {
     return out;
   }
   if (!is_colour_encoding(image)) {
-    fail_at(where, "colour encoding '" + image.encoding + "' is not one gslam reads (" + encodings_read() + ")");
+    fail_at(where, "colour encoding '" + image.encoding + "' is not one gslam reads (" +
+                       encodings_read() + ")");
   }
   const int b = bytes_per_pixel(image.encoding);
   check_layout(image, b, where);
@@ -103,9 +110,11 @@ splat::Image8 decode_colour(const RosImage& image, const std::string& where) {
   return out;
 }
 
-std::vector<float> decode_depth(const RosImage& image, double depth_scale, const std::string& where) {
+std::vector<float> decode_depth(const RosImage& image, double depth_scale,
+                                const std::string& where) {
   if (!is_depth_encoding(image)) {
-    fail_at(where, "depth encoding '" + (image.compressed ? "compressed " + image.encoding : image.encoding) +
+    fail_at(where, "depth encoding '" +
+                       (image.compressed ? "compressed " + image.encoding : image.encoding) +
                        "' is not one gslam reads (16UC1 in millimetres or 32FC1 in metres)");
   }
   const bool f32 = image.encoding == "32FC1";

@@ -23,6 +23,7 @@ splat::Image8 decode_colour(const RosImage& image, const std::string& where);
 // Depth [H, W] in metres: each stored value times float(1 / depth_scale), exactly as a depth PNG
 // is read, so that the same values give the same floats. Not finite or negative: 0 (no depth).
 // Throws splat::Error starting with `where` as decode_colour does.
-std::vector<float> decode_depth(const RosImage& image, double depth_scale, const std::string& where);
+std::vector<float> decode_depth(const RosImage& image, double depth_scale,
+                                const std::string& where);
 
 }  // namespace app

@@ -4,15 +4,15 @@
 // CameraInfo, and reconstruct to the folder's trajectory. Bad recordings give one-line errors.
 // Without Node and the npm packages, or without ROS, the tests skip, unless
 // GSLAM_REQUIRE_ROS_TESTS (CI) makes that a failure.
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iomanip>
-#include <sstream>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "app/run_gslam.h"
 #include "datasets/bag_reader.h"
@@ -51,11 +51,15 @@ constexpr double kTrajectoryTolerance = 1e-4;
 
 std::string mcap_writer_missing() {
   const std::filesystem::path tools = GSLAM_TOOLS_DIR;
-  if (!gslam::test::program_available("node")) return "node is not on PATH (scripts/install_deps.sh installs it)";
-  if (!gslam::test::program_available("lz4")) return "the lz4 command is missing (apt-get install lz4)";
-  for (const char* p : {"@mcap/core", "@foxglove/rosmsg2-serialization", "@foxglove/rosmsg", "@foxglove/wasm-zstd"}) {
+  if (!gslam::test::program_available("node"))
+    return "node is not on PATH (scripts/install_deps.sh installs it)";
+  if (!gslam::test::program_available("lz4"))
+    return "the lz4 command is missing (apt-get install lz4)";
+  for (const char* p : {"@mcap/core", "@foxglove/rosmsg2-serialization", "@foxglove/rosmsg",
+                        "@foxglove/wasm-zstd"}) {
     if (!std::filesystem::exists(tools / "node_modules" / p)) {
-      return std::string(p) + " is not under " + tools.string() + "/node_modules (scripts/install_deps.sh installs it)";
+      return std::string(p) + " is not under " + tools.string() +
+             "/node_modules (scripts/install_deps.sh installs it)";
     }
   }
   return "";
@@ -66,10 +70,13 @@ std::array<std::uint32_t, 2> ros_time(const std::string& stem) {
   const auto dot = stem.find('.');
   std::string frac = dot == std::string::npos ? "" : stem.substr(dot + 1);
   frac.resize(9, '0');
-  return {static_cast<std::uint32_t>(std::stoul(stem.substr(0, dot))), static_cast<std::uint32_t>(std::stoul(frac))};
+  return {static_cast<std::uint32_t>(std::stoul(stem.substr(0, dot))),
+          static_cast<std::uint32_t>(std::stoul(frac))};
 }
 
-std::array<std::uint32_t, 2> ros_time(const std::filesystem::path& file) { return ros_time(file.stem().string()); }
+std::array<std::uint32_t, 2> ros_time(const std::filesystem::path& file) {
+  return ros_time(file.stem().string());
+}
 
 // Motion capture as TUM's bags publish it: groundtruth.txt's poses of /kinect in /world within
 // the first `frames` frames' time span (on /tf), and a fixed mount /kinect -> /rgb_optical (on
@@ -80,11 +87,13 @@ struct Transform {
   std::array<double, 4> q;
 };
 constexpr std::array<double, 3> kMountT = {0.01, -0.02, 0.03};
-constexpr std::array<double, 4> kMountQ = {0, 0, 0.7071067811865476, 0.7071067811865476};  // 90 degrees about z
+constexpr std::array<double, 4> kMountQ = {0, 0, 0.7071067811865476,
+                                           0.7071067811865476};  // 90 degrees about z
 
 std::vector<Transform> mocap(const app::Dataset& folder, int frames) {
   std::ifstream in(gslam::test::shared_data(kTeddy) / "groundtruth.txt");
-  const double first = folder.entries.front().timestamp - 0.1, last = folder.entries[std::size_t(frames - 1)].timestamp + 0.1;
+  const double first = folder.entries.front().timestamp - 0.1,
+               last = folder.entries[std::size_t(frames - 1)].timestamp + 0.1;
   std::vector<Transform> out;
   for (std::string line; std::getline(in, line);) {
     if (line.empty() || line[0] == '#') continue;
@@ -100,12 +109,14 @@ std::vector<Transform> mocap(const app::Dataset& folder, int frames) {
 }
 
 // With --gt-frames world,rgb_optical: the folder's ground truth (groundtruth.txt) times the mount.
-void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::path& recording, int frames) {
+void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::path& recording,
+                            int frames) {
   app::DatasetOptions o;
   o.gt_frames = "world,rgb_optical";
   const app::Dataset bag = app::open_dataset(recording, o);
   Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
-  mount.linear() = Eigen::Quaterniond(kMountQ[3], kMountQ[0], kMountQ[1], kMountQ[2]).toRotationMatrix();
+  mount.linear() =
+      Eigen::Quaterniond(kMountQ[3], kMountQ[0], kMountQ[1], kMountQ[2]).toRotationMatrix();
   mount.translation() = Eigen::Vector3d(kMountT[0], kMountT[1], kMountT[2]);
   int compared = 0;
   for (int i = 0; i < frames; ++i) {
@@ -113,13 +124,15 @@ void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::p
     const auto& from_tf = bag.entries[std::size_t(i)].T_world_cam_truth;
     ASSERT_EQ(from_tf.has_value(), truth.has_value()) << "frame " << i;
     if (!truth) continue;
-    EXPECT_TRUE(from_tf->isApprox(*truth * mount, 1e-9)) << "frame " << i << "\n" << from_tf->matrix() << "\n"
+    EXPECT_TRUE(from_tf->isApprox(*truth * mount, 1e-9)) << "frame " << i << "\n"
+                                                         << from_tf->matrix() << "\n"
                                                          << (*truth * mount).matrix();
     ++compared;
   }
   EXPECT_GT(compared, frames / 2);
   o.gt_frames = "world,nowhere";
-  GSLAM_EXPECT_ERROR(app::open_dataset(recording, o), "--gt-frames world,nowhere: no chain of transforms from world to nowhere",
+  GSLAM_EXPECT_ERROR(app::open_dataset(recording, o),
+                     "--gt-frames world,nowhere: no chain of transforms from world to nowhere",
                      "world -> kinect", "kinect -> rgb_optical");
 }
 
@@ -148,7 +161,8 @@ std::vector<std::uint8_t> png_bytes(const std::filesystem::path& png) {
 }
 
 void write_bytes(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
 }
 
 struct McapSpec {
@@ -161,7 +175,8 @@ struct McapSpec {
 };
 
 // Writes the first spec.frames teddy frames with the reference writer to `out`.
-void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const std::filesystem::path& out) {
+void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
+                      const std::filesystem::path& out) {
   const std::filesystem::path raw = out.parent_path() / (out.stem().string() + "_raw");
   std::filesystem::create_directories(raw);
   std::ostringstream frames;
@@ -174,21 +189,24 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const st
     } else {
       write_bytes(raw / c, colour_bytes(f, spec.colour_encoding == "bgr8"));
     }
-    write_bytes(raw / d, spec.depth_encoding == "32FC1" ? float_bytes(f.depth) : png_bytes(e.depth));
+    write_bytes(raw / d,
+                spec.depth_encoding == "32FC1" ? float_bytes(f.depth) : png_bytes(e.depth));
     const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
-    frames << (i ? "," : "") << R"({"colour": ")" << c << R"(", "colour_stamp": [)" << ct[0] << "," << ct[1]
-           << R"(], "depth": ")" << d << R"(", "depth_stamp": [)" << dt[0] << "," << dt[1] << "]}";
+    frames << (i ? "," : "") << R"({"colour": ")" << c << R"(", "colour_stamp": [)" << ct[0] << ","
+           << ct[1] << R"(], "depth": ")" << d << R"(", "depth_stamp": [)" << dt[0] << "," << dt[1]
+           << "]}";
   }
   std::ostringstream k;
   for (std::size_t i = 0; i < 9; ++i) k << (i ? "," : "") << kTeddyK[i];
   std::ostringstream tf;
   tf << std::setprecision(17);
   if (spec.tf) {
-    const auto json = [&](const std::array<std::uint32_t, 2>& stamp, const char* parent, const char* child,
-                          const std::array<double, 3>& t, const std::array<double, 4>& q) {
-      tf << R"({"stamp": [)" << stamp[0] << "," << stamp[1] << R"(], "parent": ")" << parent << R"(", "child": ")"
-         << child << R"(", "t": [)" << t[0] << "," << t[1] << "," << t[2] << R"(], "q": [)" << q[0] << "," << q[1]
-         << "," << q[2] << "," << q[3] << "]}";
+    const auto json = [&](const std::array<std::uint32_t, 2>& stamp, const char* parent,
+                          const char* child, const std::array<double, 3>& t,
+                          const std::array<double, 4>& q) {
+      tf << R"({"stamp": [)" << stamp[0] << "," << stamp[1] << R"(], "parent": ")" << parent
+         << R"(", "child": ")" << child << R"(", "t": [)" << t[0] << "," << t[1] << "," << t[2]
+         << R"(], "q": [)" << q[0] << "," << q[1] << "," << q[2] << "," << q[3] << "]}";
     };
     tf << R"(, "tf": [)";
     const std::vector<Transform> poses = mocap(folder, spec.frames);
@@ -200,16 +218,19 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec, const st
     json(ros_time(folder.entries.front().rgb), "kinect", "rgb_optical", kMountT, kMountQ);
     tf << "]";
   }
-  gslam::test::write_text(raw / "manifest.json",
-                          R"({"compression": ")" + spec.compression + R"(", "chunk_size": 1500000, "width": 640, "height": 480, "k": [)" +
-                              k.str() + R"(], "colour_topic": "/camera/rgb/image_color", "colour_encoding": ")" +
-                              spec.colour_encoding + R"(", "depth_topic": )" +
-                              (spec.depth ? R"("/camera/depth/image")" : "null") + R"(, "depth_encoding": ")" +
-                              spec.depth_encoding + R"(", "info_topic": )" +
-                              (spec.camera_info ? R"("/camera/rgb/camera_info")" : "null") + R"(, "frames": [)" +
-                              frames.str() + "]" + tf.str() + "}");
-  const auto r = gslam::test::run_command("node " + std::string(GSLAM_SOURCE_DIR) + "/tests/interop/write_mcap.mjs " +
-                                          GSLAM_TOOLS_DIR + " " + (raw / "manifest.json").string() + " " + out.string());
+  gslam::test::write_text(
+      raw / "manifest.json",
+      R"({"compression": ")" + spec.compression +
+          R"(", "chunk_size": 1500000, "width": 640, "height": 480, "k": [)" + k.str() +
+          R"(], "colour_topic": "/camera/rgb/image_color", "colour_encoding": ")" +
+          spec.colour_encoding + R"(", "depth_topic": )" +
+          (spec.depth ? R"("/camera/depth/image")" : "null") + R"(, "depth_encoding": ")" +
+          spec.depth_encoding + R"(", "info_topic": )" +
+          (spec.camera_info ? R"("/camera/rgb/camera_info")" : "null") + R"(, "frames": [)" +
+          frames.str() + "]" + tf.str() + "}");
+  const auto r = gslam::test::run_command("node " + std::string(GSLAM_SOURCE_DIR) +
+                                          "/tests/interop/write_mcap.mjs " + GSLAM_TOOLS_DIR + " " +
+                                          (raw / "manifest.json").string() + " " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::filesystem::remove_all(raw);
 }
@@ -236,8 +257,10 @@ void expect_same_frames(const app::Dataset& folder, const app::Dataset& bag, int
     const splat::RgbdFrame a = folder.load(std::size_t(i)), b = bag.load(std::size_t(i));
     ASSERT_EQ(a.rgb.size(), b.rgb.size()) << "frame " << i;
     ASSERT_EQ(a.depth.size(), b.depth.size()) << "frame " << i;
-    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * 4), 0) << "colour of frame " << i;
-    EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * 4), 0) << "depth of frame " << i;
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * 4), 0)
+        << "colour of frame " << i;
+    EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * 4), 0)
+        << "depth of frame " << i;
   }
 }
 
@@ -248,7 +271,8 @@ double trajectory_difference(const std::filesystem::path& a, const std::filesyst
   double worst = 0;
   for (std::size_t i = 0; i < std::min(ta.size(), tb.size()); ++i) {
     EXPECT_NEAR(ta[i].timestamp, tb[i].timestamp, 1e-6) << "line " << i;
-    worst = std::max(worst, (ta[i].T_world_cam.translation() - tb[i].T_world_cam.translation()).norm());
+    worst =
+        std::max(worst, (ta[i].T_world_cam.translation() - tb[i].T_world_cam.translation()).norm());
   }
   return worst;
 }
@@ -258,22 +282,28 @@ double trajectory_difference(const std::filesystem::path& a, const std::filesyst
 // coming from /tf (--gt-frames, recorded in the run's summary.json with the topics, so that eval
 // needs no options).
 void expect_same_reconstruction(const std::filesystem::path& recording, const TempDir& dir) {
-  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
+  gslam::test::write_text(dir / "quick.json",
+                          R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
   const int frames = gslam::test::test_time_scale() > 1 ? 10 : kFrames;
-  const std::string common = " --max-frames " + std::to_string(frames) + " --backend cpu --config " + (dir / "quick.json").string();
-  const auto folder = run_gslam("reconstruct " + gslam::test::shared_data(kTeddy).string() + " --out " +
-                                (dir / "folder_run").string() + common);
+  const std::string common = " --max-frames " + std::to_string(frames) +
+                             " --backend cpu --config " + (dir / "quick.json").string();
+  const auto folder = run_gslam("reconstruct " + gslam::test::shared_data(kTeddy).string() +
+                                " --out " + (dir / "folder_run").string() + common);
   ASSERT_EQ(folder.exit_code, 0) << folder.output;
-  const auto bag = run_gslam("reconstruct " + recording.string() + " --out " + (dir / "bag_run").string() + common +
-                             " --color-topic /camera/rgb/image_color --gt-frames world,kinect");
+  const auto bag =
+      run_gslam("reconstruct " + recording.string() + " --out " + (dir / "bag_run").string() +
+                common + " --color-topic /camera/rgb/image_color --gt-frames world,kinect");
   ASSERT_EQ(bag.exit_code, 0) << bag.output;
-  const nlohmann::json input = nlohmann::json::parse(gslam::test::read_text(dir / "bag_run" / "summary.json"))["input"];
+  const nlohmann::json input =
+      nlohmann::json::parse(gslam::test::read_text(dir / "bag_run" / "summary.json"))["input"];
   EXPECT_EQ(input.value("color_topic", ""), "/camera/rgb/image_color") << input.dump();
   EXPECT_EQ(input.value("depth_topic", ""), "/camera/depth/image") << input.dump();
   EXPECT_EQ(input.value("gt_frames", ""), "world,kinect") << input.dump();
-  const double difference = trajectory_difference(dir / "folder_run" / "trajectory.txt", dir / "bag_run" / "trajectory.txt");
+  const double difference = trajectory_difference(dir / "folder_run" / "trajectory.txt",
+                                                  dir / "bag_run" / "trajectory.txt");
   EXPECT_LT(difference, kTrajectoryTolerance) << "metres";
-  std::printf("bag vs folder trajectory: largest position difference %.3g m over %d frames\n", difference, frames);
+  std::printf("bag vs folder trajectory: largest position difference %.3g m over %d frames\n",
+              difference, frames);
   const auto eval = run_gslam("eval " + (dir / "bag_run").string() + " --backend cpu --every 10");
   EXPECT_EQ(eval.exit_code, 0) << eval.output;
   EXPECT_NE(eval.output.find("ATE"), std::string::npos) << eval.output;
@@ -282,11 +312,15 @@ void expect_same_reconstruction(const std::filesystem::path& recording, const Te
 // `gslam live` replays the recording (every frame, no clock, so the test does not depend on
 // the machine's speed) and writes a run that eval takes.
 void expect_live_replay(const std::filesystem::path& recording, const TempDir& dir) {
-  gslam::test::write_text(dir / "quick.json", R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
-  const auto live = run_gslam("live " + recording.string() + " --headless --every-frame --max-frames 8 --backend cpu --out " +
-                              (dir / "live_run").string() + " --config " + (dir / "quick.json").string());
+  gslam::test::write_text(dir / "quick.json",
+                          R"({"refine_passes": 0, "mapping": {"iterations": 3}})");
+  const auto live =
+      run_gslam("live " + recording.string() +
+                " --headless --every-frame --max-frames 8 --backend cpu --out " +
+                (dir / "live_run").string() + " --config " + (dir / "quick.json").string());
   ASSERT_EQ(live.exit_code, 0) << live.output;
-  EXPECT_EQ(app::read_tum_trajectory(dir / "live_run" / "trajectory.txt").size(), 8u) << live.output;
+  EXPECT_EQ(app::read_tum_trajectory(dir / "live_run" / "trajectory.txt").size(), 8u)
+      << live.output;
   const auto eval = run_gslam("eval " + (dir / "live_run").string() + " --backend cpu --every 10");
   EXPECT_EQ(eval.exit_code, 0) << eval.output;
 }
@@ -296,7 +330,8 @@ class McapInput : public ::testing::Test {
   void SetUp() override {
     const std::string missing = mcap_writer_missing();
     GSLAM_REQUIRE_TOOL(missing.empty(), "the MCAP reference writer is unavailable: " + missing);
-    if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+    if (gslam::test::shared_data(kTeddy).empty())
+      GTEST_SKIP() << "shared data " << kTeddy << " not found";
   }
 };
 
@@ -307,7 +342,8 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   McapSpec spec;  // zstd chunks, bgr8 colour, 32FC1 depth
   spec.tf = true;
   write_teddy_mcap(folder, spec, mcap);
-  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt", dir / "groundtruth.txt");
+  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt",
+                             dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(mcap);
   EXPECT_EQ(bag.format, "mcap");
   EXPECT_DOUBLE_EQ(bag.depth_scale, 1.0) << "32FC1 is in metres";
@@ -342,7 +378,8 @@ TEST_F(McapInput, Lz4ChunksAnd16BitDepth) {
   spec.depth_encoding = "16UC1";  // TUM's 1/5000 m values
   spec.frames = 3;
   write_teddy_mcap(folder, spec, dir / "teddy.mcap");
-  EXPECT_DOUBLE_EQ(app::open_dataset(dir / "teddy.mcap").depth_scale, 1000) << "16UC1 is millimetres by ROS convention";
+  EXPECT_DOUBLE_EQ(app::open_dataset(dir / "teddy.mcap").depth_scale, 1000)
+      << "16UC1 is millimetres by ROS convention";
   app::DatasetOptions o;
   o.depth_scale = 5000;
   o.color_topic = "/camera/rgb/image_color";
@@ -359,19 +396,21 @@ TEST_F(McapInput, BadRecordingsGiveOneLineErrors) {
   // Truncated: cut inside the data.
   const std::string bytes = gslam::test::read_text(dir / "good.mcap");
   gslam::test::write_text(dir / "cut.mcap", bytes.substr(0, bytes.size() / 2));
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "cut.mcap"), (dir / "cut.mcap").string(), std::string("truncated"));
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "cut.mcap"), (dir / "cut.mcap").string(),
+                     std::string("truncated"));
   // Named topics that are not there, or not images.
   app::DatasetOptions o;
   o.depth_topic = "/camera/depth/none";
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "good.mcap", o), "--depth-topic /camera/depth/none: no such topic",
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "good.mcap", o),
+                     "--depth-topic /camera/depth/none: no such topic",
                      "/camera/depth/image (sensor_msgs/Image, 2 messages)");
   o.depth_topic = "/camera/rgb/camera_info";
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "good.mcap", o), "holds sensor_msgs/CameraInfo");
   // No depth topic at all.
   spec.depth = false;
   write_teddy_mcap(folder, spec, dir / "no_depth.mcap");
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "no_depth.mcap"), (dir / "no_depth.mcap").string(), std::string("no depth topic"),
-                     std::string("16UC1"));
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "no_depth.mcap"), (dir / "no_depth.mcap").string(),
+                     std::string("no depth topic"), std::string("16UC1"));
   // A colour encoding gslam does not read: not found by type, refused when named.
   spec.depth = true;
   spec.colour_encoding = "yuv422";
@@ -379,20 +418,23 @@ TEST_F(McapInput, BadRecordingsGiveOneLineErrors) {
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "yuv.mcap"), "no colour topic");
   o = {};
   o.color_topic = "/camera/rgb/image_color";
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "yuv.mcap", o), "/camera/rgb/image_color message 0: encoding 'yuv422'",
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "yuv.mcap", o),
+                     "/camera/rgb/image_color message 0: encoding 'yuv422'",
                      "not a colour encoding");
   // Without CameraInfo the camera must be given.
   spec.colour_encoding = "rgb8";
   spec.camera_info = false;
   write_teddy_mcap(folder, spec, dir / "no_info.mcap");
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "no_info.mcap"), "no sensor_msgs/CameraInfo topic", "--intrinsics");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "no_info.mcap"), "no sensor_msgs/CameraInfo topic",
+                     "--intrinsics");
   o = {};
   o.intrinsics = "500,500,320,240";
   EXPECT_DOUBLE_EQ(app::open_dataset(dir / "no_info.mcap", o).intrinsics.fx, 500);
   // Topic options are for recordings only.
   o = {};
   o.color_topic = "/x";
-  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddy), o), "--color-topic, --depth-topic and --gt-frames are for ROS recordings");
+  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddy), o),
+                     "--color-topic, --depth-topic and --gt-frames are for ROS recordings");
 }
 
 // Hand-made MCAP records: sizes that do not fit are refused before anything is allocated.
@@ -411,26 +453,35 @@ const std::string kMagic("\x89MCAP0\r\n", 8);
 TEST(McapReader, CraftedSizesAreRefused) {
   TempDir dir;
   const std::string header = record(0x01, le<std::uint32_t>(0) + le<std::uint32_t>(0));
-  const std::string end = record(0x0F, le<std::uint32_t>(0)) + record(0x02, std::string(20, '\0')) + kMagic;
+  const std::string end =
+      record(0x0F, le<std::uint32_t>(0)) + record(0x02, std::string(20, '\0')) + kMagic;
   // A chunk claiming 1 TiB uncompressed.
-  const std::string chunk = record(0x06, le<std::uint64_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(1ull << 40) +
-                                             le<std::uint32_t>(0) + le<std::uint32_t>(4) + "zstd" + le<std::uint64_t>(0));
+  const std::string chunk =
+      record(0x06, le<std::uint64_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(1ull << 40) +
+                       le<std::uint32_t>(0) + le<std::uint32_t>(4) + "zstd" + le<std::uint64_t>(0));
   gslam::test::write_text(dir / "huge.mcap", kMagic + header + chunk + end);
-  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "huge.mcap"), "huge.mcap: record at byte", "1099511627776 bytes uncompressed");
+  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "huge.mcap"), "huge.mcap: record at byte",
+                     "1099511627776 bytes uncompressed");
   // A record longer than the file.
-  gslam::test::write_text(dir / "long.mcap", kMagic + header + record(0x05, "xx").substr(0, 1) + le<std::uint64_t>(1ull << 62) + end);
-  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "long.mcap"), "long.mcap: record at byte", "runs past the end of the file");
+  gslam::test::write_text(dir / "long.mcap", kMagic + header + record(0x05, "xx").substr(0, 1) +
+                                                 le<std::uint64_t>(1ull << 62) + end);
+  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "long.mcap"), "long.mcap: record at byte",
+                     "runs past the end of the file");
   // A message before its channel, and a chunk compression nobody knows.
-  const std::string message = record(0x05, le<std::uint16_t>(7) + le<std::uint32_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(0));
+  const std::string message = record(0x05, le<std::uint16_t>(7) + le<std::uint32_t>(0) +
+                                               le<std::uint64_t>(0) + le<std::uint64_t>(0));
   gslam::test::write_text(dir / "orphan.mcap", kMagic + header + message + end);
-  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "orphan.mcap"), "message on channel 7, not defined before it");
-  const std::string brotli = record(0x06, le<std::uint64_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(0) +
-                                              le<std::uint32_t>(0) + le<std::uint32_t>(6) + "brotli" + le<std::uint64_t>(0));
+  GSLAM_EXPECT_ERROR(app::open_mcap(dir / "orphan.mcap"),
+                     "message on channel 7, not defined before it");
+  const std::string brotli = record(
+      0x06, le<std::uint64_t>(0) + le<std::uint64_t>(0) + le<std::uint64_t>(0) +
+                le<std::uint32_t>(0) + le<std::uint32_t>(6) + "brotli" + le<std::uint64_t>(0));
   gslam::test::write_text(dir / "brotli.mcap", kMagic + header + brotli + end);
   GSLAM_EXPECT_ERROR(app::open_mcap(dir / "brotli.mcap"), "chunk compression 'brotli'");
   gslam::test::write_text(dir / "not.mcap", "hello, this is not MCAP at all");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "not.mcap"), "not.mcap: not an MCAP file");
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "absent.mcap"), "absent.mcap: recording does not exist");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "absent.mcap"),
+                     "absent.mcap: recording does not exist");
 }
 
 #ifdef GSLAM_HAVE_ROS1
@@ -442,10 +493,13 @@ void write_teddy_bag(const app::Dataset& folder, int frames, const std::filesyst
     const splat::RgbdFrame f = folder.load(std::size_t(i));
     const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
     if (i == 0) bag.camera_info("/camera/rgb/camera_info", ct[0], ct[1], 640, 480, kTeddyK);
-    bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3, colour_bytes(f, false));
-    bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4, float_bytes(f.depth));
+    bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3,
+              colour_bytes(f, false));
+    bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4,
+              float_bytes(f.depth));
   }
-  for (const Transform& tf : mocap(folder, frames)) bag.transform("/tf", tf.stamp[0], tf.stamp[1], "/world", "/kinect", tf.t, tf.q);
+  for (const Transform& tf : mocap(folder, frames))
+    bag.transform("/tf", tf.stamp[0], tf.stamp[1], "/world", "/kinect", tf.t, tf.q);
   const auto t0 = ros_time(folder.entries.front().rgb);
   bag.transform("/tf_static", t0[0], t0[1], "kinect", "rgb_optical", kMountT, kMountQ);
   bag.close();
@@ -456,9 +510,11 @@ class Ros1BagInput : public ::testing::Test {
  protected:
   void SetUp() override {
 #ifndef GSLAM_HAVE_ROS1
-    GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (scripts/install_deps.sh installs librosbag-dev)");
+    GSLAM_REQUIRE_TOOL(
+        false, "gslam was built without ROS 1 (scripts/install_deps.sh installs librosbag-dev)");
 #endif
-    if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+    if (gslam::test::shared_data(kTeddy).empty())
+      GTEST_SKIP() << "shared data " << kTeddy << " not found";
   }
 };
 
@@ -467,7 +523,8 @@ TEST_F(Ros1BagInput, RosbagFileGivesTheFolderFramesAndTrajectory) {
   TempDir dir;
   const app::Dataset folder = open_teddy(kFrames);
   write_teddy_bag(folder, kFrames, dir / "teddy.bag");
-  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt", dir / "groundtruth.txt");
+  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt",
+                             dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(dir / "teddy.bag");
   EXPECT_EQ(bag.format, "rosbag");
   EXPECT_DOUBLE_EQ(bag.intrinsics.fx, kTeddyK[0]);
@@ -484,15 +541,17 @@ TEST_F(Ros1BagInput, TruncatedOrUnindexedBagIsOneLineError) {
   write_teddy_bag(open_teddy(2), 2, dir / "good.bag");
   const std::string bytes = gslam::test::read_text(dir / "good.bag");
   gslam::test::write_text(dir / "cut.bag", bytes.substr(0, bytes.size() / 2));
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "cut.bag"), (dir / "cut.bag").string() + ": ", std::string("truncated"));
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "cut.bag"), (dir / "cut.bag").string() + ": ",
+                     std::string("truncated"));
   // A bag whose recorder never wrote the index (index_pos 0, as while recording).
   std::string unindexed = bytes;
   const auto at = unindexed.find("index_pos=");
   ASSERT_NE(at, std::string::npos);
   unindexed.replace(at + 10, 8, std::string(8, '\0'));
   gslam::test::write_text(dir / "unindexed.bag", unindexed);
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "unindexed.bag"), (dir / "unindexed.bag").string() + ": ",
-                     std::string("unindexed ROS 1 bag"), std::string("rosbag reindex"));
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "unindexed.bag"),
+                     (dir / "unindexed.bag").string() + ": ", std::string("unindexed ROS 1 bag"),
+                     std::string("rosbag reindex"));
   gslam::test::write_text(dir / "not.bag", "#ROSBAG V2.0\nnothing else");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "not.bag"), (dir / "not.bag").string() + ": ");
 #endif

@@ -16,13 +16,15 @@ class Ros1BagWriter {
   Ros1BagWriter(const Ros1BagWriter&) = delete;
   Ros1BagWriter& operator=(const Ros1BagWriter&) = delete;
   // A sensor_msgs/Image stamped (and recorded) at sec.nsec; rows of width * bytes per pixel.
-  void image(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, const std::string& encoding,
-             std::uint32_t width, std::uint32_t height, std::uint32_t step, const std::vector<std::uint8_t>& data);
-  void camera_info(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, std::uint32_t width,
-                   std::uint32_t height, const std::array<double, 9>& k);
+  void image(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
+             const std::string& encoding, std::uint32_t width, std::uint32_t height,
+             std::uint32_t step, const std::vector<std::uint8_t>& data);
+  void camera_info(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
+                   std::uint32_t width, std::uint32_t height, const std::array<double, 9>& k);
   // A tf2_msgs/TFMessage with one transform: child's pose in parent (t: x y z, q: x y z w).
-  void transform(const std::string& topic, std::uint32_t sec, std::uint32_t nsec, const std::string& parent,
-                 const std::string& child, const std::array<double, 3>& t, const std::array<double, 4>& q);
+  void transform(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
+                 const std::string& parent, const std::string& child,
+                 const std::array<double, 3>& t, const std::array<double, 4>& q);
   void close();
 
  private:
