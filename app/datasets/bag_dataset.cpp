@@ -201,7 +201,7 @@ void attach_tf_ground_truth(Dataset& d, const BagReader& bag, const std::string&
     chain.push_back(&it->second);
     f = it->second.parent;
   }
-  const auto at = [](const Edge& e, double t) -> std::optional<Eigen::Isometry3d> {
+  const auto at = [&path](const Edge& e, double t) -> std::optional<Eigen::Isometry3d> {
     const auto& s = e.samples;
     auto it = std::lower_bound(s.begin(), s.end(), t,
                                [](const RosTransform& x, double v) { return x.stamp < v; });
@@ -213,10 +213,18 @@ void attach_tf_ground_truth(Dataset& d, const BagReader& bag, const std::string&
     // Within 0.02 s, as TUM's associate.py pairs poses with frames; static transforms always.
     if (!best->is_static && std::abs(best->stamp - t) > 0.02) return std::nullopt;
     const auto& q = best->rotation;
+    const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
+    const Eigen::Vector3d translation(best->translation[0], best->translation[1],
+                                      best->translation[2]);
+    if (!(rotation.norm() > 1e-6) || !std::isfinite(rotation.norm()) || !translation.allFinite()) {
+      throw splat::Error(path.string() + ": /tf transform " + best->parent + " -> " + best->child +
+                         " at " + std::to_string(best->stamp) +
+                         " s is not a pose (zero or non-finite quaternion, or "
+                         "non-finite translation)");
+    }
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
-    T.translation() =
-        Eigen::Vector3d(best->translation[0], best->translation[1], best->translation[2]);
+    T.linear() = rotation.normalized().toRotationMatrix();
+    T.translation() = translation;
     return T;
   };
   std::size_t found = 0;

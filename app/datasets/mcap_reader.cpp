@@ -375,9 +375,15 @@ class McapReader final : public BagReader {
         break;
       }
       case kMessage: {
-        const std::vector<std::uint8_t> bytes =
-            file_.read(body, std::min(length, kImageHeaderBytes + 22));
-        message(bytes, length, kNoChunk, body);
+        // Only the fields, unless the channel's messages are read: its id is the first two bytes.
+        std::uint64_t wanted = 22;
+        if (length >= 2) {
+          std::uint16_t id;
+          std::memcpy(&id, file_.read(body, 2).data(), 2);
+          const auto ch = channels_.find(id);
+          if (ch != channels_.end() && ch->second.kind != Kind::kOther) wanted += kImageHeaderBytes;
+        }
+        message(file_.read(body, std::min(length, wanted)), length, kNoChunk, body);
         break;
       }
       case kChunk:

@@ -170,7 +170,8 @@ struct McapSpec {
   std::string colour_encoding = "bgr8";  // or "png": sensor_msgs/CompressedImage
   std::string depth_encoding = "32FC1";  // or 16UC1 (the PNG's values)
   bool depth = true, camera_info = true;
-  bool tf = false;  // mocap() on /tf and the mount on /tf_static
+  bool tf = false;     // mocap() on /tf and the mount on /tf_static
+  bool chunks = true;  // false: messages at the top level of the file
   int frames = kFrames;
 };
 
@@ -220,8 +221,8 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
   }
   gslam::test::write_text(
       raw / "manifest.json",
-      R"({"compression": ")" + spec.compression +
-          R"(", "chunk_size": 1500000, "width": 640, "height": 480, "k": [)" + k.str() +
+      R"({"compression": ")" + spec.compression + R"(", "chunk_size": 1500000, "use_chunks": )" +
+          (spec.chunks ? "true" : "false") + R"(, "width": 640, "height": 480, "k": [)" + k.str() +
           R"(], "colour_topic": "/camera/rgb/image_color", "colour_encoding": ")" +
           spec.colour_encoding + R"(", "depth_topic": )" +
           (spec.depth ? R"("/camera/depth/image")" : "null") + R"(, "depth_encoding": ")" +
@@ -359,11 +360,12 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   expect_live_replay(mcap, dir);
 }
 
-TEST_F(McapInput, CompressedPngColourDecodesAsTheFile) {
+TEST_F(McapInput, CompressedPngColourWithoutChunksDecodesAsTheFile) {
   TempDir dir;
   const app::Dataset folder = open_teddy(3);
   McapSpec spec;
   spec.colour_encoding = "png";
+  spec.chunks = false;
   spec.frames = 3;
   write_teddy_mcap(folder, spec, dir / "teddy.mcap");
   expect_same_frames(folder, app::open_dataset(dir / "teddy.mcap"), 3);

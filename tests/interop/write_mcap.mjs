@@ -2,7 +2,8 @@
 // (@mcap/core) and ROS 2 CDR serialization (@foxglove/rosmsg2-serialization), from frames a
 // test prepared as raw files. gslam's own MCAP reader is checked against what this writes.
 // Usage: node write_mcap.mjs TOOLS_DIR MANIFEST.json OUT.mcap
-// MANIFEST: {compression: "zstd" | "lz4" | "", chunk_size, width, height, k: [9 numbers],
+// MANIFEST: {compression: "zstd" | "lz4" | "", chunk_size, use_chunks (default true: messages in
+//   chunks, as rosbag2 writes them; false: at the top level), width, height, k: [9 numbers],
 //   colour_topic, colour_encoding (rgb8, bgr8, ...; "png" makes CompressedImage), depth_topic,
 //   depth_encoding (16UC1 | 32FC1), info_topic (depth_topic, info_topic null: none written),
 //   frames: [{colour: FILE, colour_stamp: [sec, nsec], depth: FILE, depth_stamp: [sec, nsec]}],
@@ -63,7 +64,9 @@ const writable = {
   },
   position: () => position,
 };
-const writer = new McapWriter({ writable, useChunks: true, chunkSize: manifest.chunk_size ?? 1 << 20, compressChunk });
+const writer = new McapWriter({
+  writable, useChunks: manifest.use_chunks ?? true, chunkSize: manifest.chunk_size ?? 1 << 20, compressChunk,
+});
 await writer.start({ profile: "ros2", library: "gslam tests/interop/write_mcap.mjs" });
 
 const serializers = {};
