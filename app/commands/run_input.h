@@ -13,8 +13,9 @@
 
 namespace app {
 
-// The "input" section: where frames came from (`format`: tum, replica, folder, or watched for a
-// folder a camera driver wrote), their camera and depth units, and the settings of the run.
+// The "input" section: where frames came from (`format`: tum, replica, images, rosbag, mcap, or
+// watched for a folder a camera driver wrote), their camera and depth units, and the settings of
+// the run.
 nlohmann::json run_input_json(const std::filesystem::path& input, const std::string& format, const splat::Camera& k,
                               double depth_scale, int max_frames, int test_every, const SlamConfig& config);
 // With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames").
