@@ -118,11 +118,11 @@ Chosen choose_topic(const BagReader& bag, const std::vector<BagTopic>& topics,
     std::vector<std::string> candidates, preferred;
     for (const auto& t : topics) {
       if (!is_image_type(t.type) || t.messages == 0) continue;
-      const std::vector<RosImage> index = bag.image_index(t.name);
-      if (index.empty() || !fits(index.front())) continue;
+      const std::optional<RosImage> first = bag.first_image(t.name);
+      if (!first || !fits(*first)) continue;
       candidates.push_back(t.name);
       // Colour over grey: a camera's image_color beside its image_mono.
-      if (want_depth || index.front().compressed || index.front().encoding != "mono8")
+      if (want_depth || first->compressed || first->encoding != "mono8")
         preferred.push_back(t.name);
     }
     if (!preferred.empty()) candidates = preferred;

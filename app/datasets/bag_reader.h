@@ -55,6 +55,13 @@ class BagReader {
   // The messages of an Image or CompressedImage topic in recording order, without their pixels
   // (data empty). Throws splat::Error naming the file and topic for a malformed message.
   virtual std::vector<RosImage> image_index(const std::string& topic) const = 0;
+  // The first message of image_index(topic) (nullopt for none), as cheaply as the format allows:
+  // topics are told apart by it before one is indexed.
+  virtual std::optional<RosImage> first_image(const std::string& topic) const {
+    std::vector<RosImage> index = image_index(topic);
+    if (index.empty()) return std::nullopt;
+    return std::move(index.front());
+  }
   // Message k of image_index(topic), with its pixels. Safe to call from several threads.
   virtual RosImage read_image(const std::string& topic, std::size_t k) const = 0;
   // The first CameraInfo message on `topic`; nullopt when it has none.

@@ -74,6 +74,22 @@ class Ros1BagReader final : public BagReader {
     return indexed(topic).headers;
   }
 
+  // One message read, not the topic: a bag's image topics are told apart before one is indexed.
+  std::optional<RosImage> first_image(const std::string& topic) const override {
+    std::lock_guard lock(mutex_);
+    const auto it = indexes_.find(topic);
+    if (it != indexes_.end()) {
+      if (it->second.headers.empty()) return std::nullopt;
+      return it->second.headers.front();
+    }
+    std::optional<RosImage> out;
+    guarded([&] {
+      rosbag::View view(bag_, rosbag::TopicQuery(topic));
+      if (view.begin() != view.end()) out = to_image(*view.begin(), false);
+    });
+    return out;
+  }
+
   RosImage read_image(const std::string& topic, std::size_t k) const override {
     std::lock_guard lock(mutex_);
     const Index& index = indexed(topic);

@@ -537,6 +537,43 @@ TEST_F(Ros1BagInput, RosbagFileGivesTheFolderFramesAndTrajectory) {
 #endif
 }
 
+// A camera's usual topics: colour beside grey (colour is taken), depth in metres beside raw
+// millimetres (ambiguous: named with --depth-topic).
+TEST_F(Ros1BagInput, TopicsFoundByTypeOrNamed) {
+#ifdef GSLAM_HAVE_ROS1
+  TempDir dir;
+  const app::Dataset folder = open_teddy(2);
+  {
+    gslam::test::Ros1BagWriter bag((dir / "camera.bag").string());
+    for (int i = 0; i < 2; ++i) {
+      const app::DatasetEntry& e = folder.entries[std::size_t(i)];
+      const splat::RgbdFrame f = folder.load(std::size_t(i));
+      const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
+      if (i == 0) bag.camera_info("/camera/rgb/camera_info", ct[0], ct[1], 640, 480, kTeddyK);
+      bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3,
+                colour_bytes(f, false));
+      bag.image("/camera/rgb/image_mono", ct[0], ct[1], "mono8", 640, 480, 640,
+                std::vector<std::uint8_t>(640 * 480));
+      bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4,
+                float_bytes(f.depth));
+      bag.image("/camera/depth/image_raw", dt[0], dt[1], "16UC1", 640, 480, 640 * 2,
+                png_bytes(e.depth));
+    }
+    bag.close();
+  }
+  GSLAM_EXPECT_ERROR(
+      app::open_dataset(dir / "camera.bag"),
+      "several depth topics (/camera/depth/image, /camera/depth/image_raw): choose one "
+      "with --depth-topic");
+  app::DatasetOptions o;
+  o.depth_topic = "/camera/depth/image_raw";
+  o.depth_scale = 5000;
+  const app::Dataset d = app::open_dataset(dir / "camera.bag", o);
+  EXPECT_EQ(d.color_topic, "/camera/rgb/image_color");
+  expect_same_frames(folder, d, 2);
+#endif
+}
+
 TEST_F(Ros1BagInput, TruncatedOrUnindexedBagIsOneLineError) {
 #ifdef GSLAM_HAVE_ROS1
   TempDir dir;
