@@ -12,7 +12,7 @@ namespace {
 // longer sequence stays behind); whatever else the folder holds stays.
 void write_one(const std::filesystem::path& dir, const SyntheticOptions& options, bool overwrite) {
   if (overwrite) {
-    for (const char* entry : {"rgb", "depth", "rgb.txt", "depth.txt", "intrinsics.txt", "groundtruth.txt"}) {
+    for (const char* entry : {"rgb", "depth", "labels", "rgb.txt", "depth.txt", "intrinsics.txt", "groundtruth.txt"}) {
       std::filesystem::remove_all(dir / entry);
     }
   }

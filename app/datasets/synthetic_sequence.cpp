@@ -278,7 +278,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::normal_distribution<double> gauss(0, 1);
   std::filesystem::create_directories(dir / "rgb");
   std::filesystem::create_directories(dir / "depth");
-  std::filesystem::create_directories(dir / "labels");
+  if (o.labels) std::filesystem::create_directories(dir / "labels");
   const Scene scene(o.twin_rooms);
   splat::ThreadPool pool;
   const Vector3d light = Vector3d(0.4, -1.0, 0.3).normalized();  // from above (y down)
@@ -347,7 +347,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     std::snprintf(name, sizeof(name), "%.6f.png", timestamp);
     write_png_rgb(dir / "rgb" / name, o.width, o.height, rgb);
     write_png_gray16(dir / "depth" / name, depth);
-    write_png_gray16(dir / "labels" / name, labels);
+    if (o.labels) write_png_gray16(dir / "labels" / name, labels);
     rgb_list += std::string(name, name + std::strlen(name) - 4) + " rgb/" + name + "\n";
     depth_list += std::string(name, name + std::strlen(name) - 4) + " depth/" + name + "\n";
     truth.push_back({timestamp, pose});
@@ -362,6 +362,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", stated, stated, cx, cy);
   write_text(dir / "intrinsics.txt", intrinsics);
   write_tum_trajectory(dir / "groundtruth.txt", truth);
+  if (!o.labels) return;
   write_text(dir / "labels" / "classes.json", R"({"classes": [
   {"id": 1, "name": "wall"}, {"id": 2, "name": "floor"}, {"id": 3, "name": "ceiling"},
   {"id": 4, "name": "ball"}, {"id": 5, "name": "cabinet"}, {"id": 6, "name": "person", "dynamic": true},

@@ -34,14 +34,16 @@ struct SyntheticOptions {
   // Moving objects (for the arc path): a person walking across the view, a chair pushed a metre
   // and left, a crate that appears (see Movers in the .cpp), with depth lost along their edges.
   bool movers = false;
+  // Exact per-pixel class ids in labels/ (16-bit PNG, the colour images' names) with
+  // labels/classes.json, which gslam then reads as the sequence's label images.
+  bool labels = false;
   uint32_t seed = 1;
   // A hard-motion preset: 2.2 rad/s peaks, 1/60 s exposure, Kinect noise, 5% holes.
   static SyntheticOptions hard_motion();
 };
 
 // Writes a synthetic RGB-D sequence in TUM layout (rgb/, depth/ as 16-bit PNG / 5000,
-// rgb.txt, depth.txt, groundtruth.txt and intrinsics.txt) with exact ground truth, and exact
-// per-pixel class ids in labels/ (16-bit PNG, same names) with labels/classes.json. The images
+// rgb.txt, depth.txt, groundtruth.txt and intrinsics.txt) with exact ground truth (and labels). The images
 // come from a ray caster of a textured room with spheres and boxes, independent of the splat
 // renderer, so reconstruction is never tested on its own image model. Deterministic.
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& options);

@@ -25,6 +25,7 @@ void write_png_rgb(const std::filesystem::path& path, int width, int height,
 
 // Writes a 16-bit greyscale PNG (for example depth in millimetres or TUM's 1/5000 m). Atomic.
 void write_png_gray16(const std::filesystem::path& path, const splat::Image16& image);
+void write_png_gray8(const std::filesystem::path& path, const splat::Image8& image);
 
 // Writes an 8-bit RGB PNG from 8-bit data (plots, screenshots). Atomic.
 void write_png_rgb8(const std::filesystem::path& path, const splat::Image8& image);

@@ -136,6 +136,11 @@ void write_png_gray16(const std::filesystem::path& path, const splat::Image16& i
             reinterpret_cast<const unsigned char*>(image.data.data()));
 }
 
+void write_png_gray8(const std::filesystem::path& path, const splat::Image8& image) {
+  if (image.channels != 1) fail(path, "expected a 1-channel image");
+  write_png(path, image.width, image.height, 8, PNG_COLOR_TYPE_GRAY, 1, image.data.data());
+}
+
 splat::Image8 read_png_rgb8(const std::filesystem::path& path) {
   return read_png<uint8_t>(path, 3, [](png_structp png, png_infop info) {
     const int type = png_get_color_type(png, info);

@@ -77,6 +77,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"odometry", "min_overlap", &o.min_overlap},
       {"odometry", "min_conditioning", &o.min_conditioning},
       {"moving", "enabled", &c.moving.enabled},
+      {"moving", "max_width", &c.moving.max_width},
       {"moving", "min_change", &c.moving.min_change},
       {"moving", "noise_sigmas", &c.moving.noise_sigmas},
       {"moving", "min_region", &c.moving.min_region},

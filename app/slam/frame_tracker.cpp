@@ -123,10 +123,15 @@ std::shared_ptr<const tracking::OdometryFrame> FrameTracker::prepare(const splat
   splat::RgbdFrame masked = frame;
   const std::vector<uint8_t> spread =
       upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
-  // Where an object left, the frame shows the static scene: only where one stands is ignored,
-  // besides what the frame ignores itself (classes its labels call dynamic).
+  // Where an object left, the frame shows the static scene: only where one stands (and around
+  // it) is ignored, besides what the frame ignores itself (classes its labels call dynamic).
   if (masked.ignore.empty()) masked.ignore.assign(spread.size(), 0);
-  for (std::size_t i = 0; i < spread.size(); ++i) masked.ignore[i] |= spread[i] == tracking::kArrived;
+  for (std::size_t i = 0; i < spread.size(); ++i) {
+    const uint8_t why = spread[i] == tracking::kArrived ? tracking::kMovingSurface
+                        : spread[i] == tracking::kOutline ? tracking::kOutlineIgnored
+                                                          : 0;
+    masked.ignore[i] = std::max(masked.ignore[i], why);
+  }
   return std::make_shared<const tracking::OdometryFrame>(masked, config_.odometry);
 }
 
@@ -134,7 +139,11 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                   const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                                   FrameRecord& record) {
   const bool detect = config_.moving.enabled;
-  moving_factor_ = tracking::OdometryFrame::factors(frame.width(), config_.odometry).back();
+  // The scale of tracking::moving_level(): the finest level at most max_width wide.
+  const std::vector<int> factors = tracking::OdometryFrame::factors(frame.width(), config_.odometry);
+  std::size_t level = 0;
+  while (level + 1 < factors.size() && frame.width() / factors[level + 1] <= config_.moving.max_width) ++level;
+  moving_factor_ = factors[level];
   // The previous frame's moving regions, grown to where they may have gone, stay out of the
   // first alignment: a large moving object could pull it off before its regions are found.
   const std::vector<uint8_t> prior =
@@ -161,7 +170,8 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
   const std::shared_ptr<const tracking::OdometryFrame> whole = prior_used_ ? prepare(frame, {}) : last_prepared_;
   std::vector<uint8_t> labels =
       tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
-  const auto moving = static_cast<std::size_t>(std::count(labels.begin(), labels.end(), tracking::kArrived));
+  const auto moving = static_cast<std::size_t>(
+      std::count_if(labels.begin(), labels.end(), [](uint8_t l) { return l == tracking::kArrived || l == tracking::kOutline; }));
   if (moving == 0) {
     if (whole != last_prepared_) {  // the prior was left out for nothing: align the whole frame
       last_prepared_ = whole;

@@ -75,8 +75,8 @@ class FrameTracker {
   // through the rasterizer against the map, from the odometry's estimate.
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
-  // The last tracked frame's moving regions (tracking::MovingLabel per pixel of the finest
-  // odometry level, moving_factor() times smaller than the frame), or empty: none found.
+  // The last tracked frame's moving regions (tracking::MovingLabel per pixel of
+  // tracking::moving_level(), moving_factor() times smaller than the frame), or empty: none found.
   const std::vector<uint8_t>& moving_labels() const { return moving_; }
   int moving_factor() const { return moving_factor_; }
   // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
@@ -123,7 +123,7 @@ class FrameTracker {
   // Finds the moving regions of a tracked frame and aligns it again without them.
   void leave_out_moving(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                         FrameRecord& record);
-  // The frame prepared for odometry with `labels` (finest level) ignored.
+  // The frame prepared for odometry with `labels` (at moving_factor()) ignored.
   std::shared_ptr<const tracking::OdometryFrame> prepare(const splat::RgbdFrame& frame,
                                                          const std::vector<uint8_t>& labels) const;
   void track_render(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);

@@ -20,7 +20,7 @@ MovingMask MovingMask::arrivals(const std::vector<uint8_t>& labels, int width, i
   bool any = false, current = false;
   uint32_t run = 0;
   for (uint8_t label : labels) {
-    const bool out = label == tracking::kArrived;
+    const bool out = label == tracking::kArrived || label == tracking::kOutline;
     any = any || out;
     if (out != current) {
       mask.runs.push_back(run);

@@ -10,7 +10,7 @@
 namespace app {
 
 struct MovingMask {
-  int width = 0, height = 0;  // the labels' size (the finest odometry level)
+  int width = 0, height = 0;  // the labels' size (tracking::moving_level())
   int factor = 1;             // the frame is this many times larger
   std::vector<uint32_t> runs;  // alternating run lengths of kept and left-out pixels, kept first
   bool empty() const { return runs.empty(); }

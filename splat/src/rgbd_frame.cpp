@@ -40,7 +40,7 @@ RgbdFrame downsample(const RgbdFrame& f, int factor) {
         for (int dx = 0; dx < factor; ++dx) {
           const std::size_t i = static_cast<std::size_t>(y * factor + dy) * f.width() + (x * factor + dx);
           for (int c = 0; c < 3; ++c) rgb[c] += f.rgb[i * 3 + c];
-          if (ignoring) ignored |= f.ignore[i];
+          if (ignoring) ignored = std::max(ignored, f.ignore[i]);
           if (f.depth[i] > 0) {
             depth += f.depth[i];
             ++valid;

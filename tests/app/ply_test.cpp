@@ -44,6 +44,34 @@ TEST(PlyFormat, RoundTripIsBitExactForEveryShDegree) {
   }
 }
 
+// A semantic map's classes (label_k, label_probability_k) come back as written, beside the
+// Gaussians; a file naming one without the other is refused.
+TEST(PlyFormat, LabelsRoundTrip) {
+  TempDir dir;
+  const splat::Gaussians map = sample_map(1, 5);
+  splat::GaussianLabels labels;
+  labels.top = 2;
+  labels.ids = {1, 7, 3, 0, 65535, 2, 0, 0, 4, 1};
+  labels.probabilities = {0.75f, 0.25f, 1.f, 0.f, 0.5f, 0.5f, 0.f, 0.f, 0.9f, 0.1f};
+  app::write_ply(dir / "map.ply", map, &labels);
+  const app::PlyMap back = app::read_ply(dir / "map.ply");
+  expect_bit_identical(map, back.gaussians);
+  EXPECT_EQ(back.labels.top, 2);
+  EXPECT_EQ(back.labels.ids, labels.ids);
+  EXPECT_EQ(back.labels.probabilities, labels.probabilities);
+  EXPECT_TRUE(back.skipped_properties.empty());
+  app::write_ply(dir / "plain.ply", map);
+  EXPECT_TRUE(app::read_ply(dir / "plain.ply").labels.empty());
+
+  write_text(dir / "half.ply",
+             "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+             "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n"
+             "property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n"
+             "property float rot_1\nproperty float rot_2\nproperty float rot_3\nproperty ushort label_0\nend_header\n"
+             "0 0 0 0 0 0 0 0 0 0 1 0 0 0 3\n");
+  EXPECT_THROW(app::read_ply(dir / "half.ply"), splat::Error);
+}
+
 TEST(PlyFormat, ReadsAsciiAndBigEndian) {
   TempDir dir;
   const std::string props =

@@ -96,7 +96,7 @@ TEST(MovingRegions, AnObjectTheReferenceSawMovingStaysMovingUntilItStops) {
   splat::RgbdFrame reference = wall({{40, 30, 80, 90}});
   reference.ignore.assign(reference.depth.size(), 0);
   for (int y = 30; y < 90; ++y) {
-    for (int x = 40; x < 80; ++x) reference.ignore[y * kWidth + x] = 1;
+    for (int x = 40; x < 80; ++x) reference.ignore[y * kWidth + x] = tracking::kMovingSurface;
   }
   std::size_t inside = 0;
   const std::vector<uint8_t> moved = regions(reference, wall({{50, 30, 90, 90}}));
@@ -119,7 +119,7 @@ TEST(MovingRegions, GrowingSpreadsRegionsByTheirOutline) {
   labels[5 * 10 + 5] = tracking::kLeft;
   const std::vector<uint8_t> grown = tracking::grow_regions(labels, 10, 10, 1);
   EXPECT_EQ(grown[5 * 10 + 5], tracking::kLeft);  // a pixel keeps its own label
-  EXPECT_EQ(grown[5 * 10 + 6], tracking::kArrived);
+  EXPECT_EQ(grown[5 * 10 + 6], tracking::kOutline);
   EXPECT_EQ(grown[5 * 10 + 7], tracking::kStaticPixel);
 }
 

@@ -13,11 +13,19 @@ namespace tracking {
 
 void MovingConfig::validate(const std::string& prefix) const {
   const splat::FieldCheck check(prefix);
+  check.at_least("max_width", max_width, 8);
   check.at_least("min_change", min_change, 0.0);
   check.at_least("noise_sigmas", noise_sigmas, 0.0);
   check.in_range("min_region", min_region, 0.0, 1.0);
   check.in_range("grow_px", grow_px, 0, 64);
   check.in_range("prior_grow_px", prior_grow_px, 0, 64);
+}
+
+std::size_t moving_level(const OdometryFrame& frame, const MovingConfig& config) {
+  const std::vector<OdometryFrame::Level>& levels = frame.levels();
+  std::size_t level = 0;
+  while (level + 1 < levels.size() && levels[level + 1].width <= config.max_width) ++level;
+  return level;
 }
 
 std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, int height, int pixels) {
@@ -28,7 +36,7 @@ std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, in
   cv::Mat grown;
   cv::dilate(any, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * pixels + 1, 2 * pixels + 1)));
   for (std::size_t i = 0; i < out.size(); ++i) {
-    if (!out[i] && grown.data[i]) out[i] = kArrived;
+    if (!out[i] && grown.data[i]) out[i] = kOutline;
   }
   return out;
 }
@@ -36,8 +44,13 @@ std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, in
 std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const OdometryFrame& current,
                                     const Eigen::Isometry3d& T_cur_ref, const OdometryConfig& odometry,
                                     const MovingConfig& config, std::span<const uint8_t> previous) {
-  const OdometryFrame::Level& ref = reference.levels().back();
-  const OdometryFrame::Level& cur = current.levels().back();
+  const std::size_t level = moving_level(current, config);
+  if (reference.levels().size() != current.levels().size()) {
+    throw splat::Error("moving_regions: pyramids of " + std::to_string(reference.levels().size()) + " and " +
+                       std::to_string(current.levels().size()) + " levels");
+  }
+  const OdometryFrame::Level& ref = reference.levels()[level];
+  const OdometryFrame::Level& cur = current.levels()[level];
   const int w = cur.width, h = cur.height;
   const std::size_t pixels = static_cast<std::size_t>(w) * h;
   if (ref.width != w || ref.height != h || (!previous.empty() && previous.size() != pixels)) {
@@ -63,7 +76,9 @@ std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const Odomet
       const float u = static_cast<float>(cur.fx) * p.x() / p.z() + static_cast<float>(cur.cx);
       const float v = static_cast<float>(cur.fy) * p.y() / p.z() + static_cast<float>(cur.cy);
       if (!(u >= 0 && v >= 0 && u < static_cast<float>(w) && v < static_cast<float>(h))) continue;
-      const bool moving = !ref.ignore.empty() && ref.ignore[i];
+      const uint8_t ignored = ref.ignore.empty() ? 0 : ref.ignore[i];
+      if (ignored != 0 && ignored < kMovingSurface) continue;  // neither static nor known to move
+      const bool moving = ignored >= kMovingSurface;
       float& slot = (moving ? warped_moving : warped)[static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u)];
       slot = std::min(slot, p.z());
     }
@@ -105,6 +120,8 @@ std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const Odomet
       if (changed[i] || continuing[i]) any.at<uint8_t>(y, x) = 255;
     }
   }
+  std::vector<uint8_t> labels(pixels, kStaticPixel);
+  if (cv::countNonZero(any) == 0) return labels;  // the usual case: nothing moved
   // Regions of changed and continuing pixels. One is kept if enough of it changed: an object
   // keeps uncovering or covering the scene while it moves, and once it stops it joins the scene.
   cv::Mat components, stats, centroids;
@@ -122,7 +139,6 @@ std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const Odomet
     const auto area = static_cast<double>(changed_area[c]);
     kept[c] = area >= min_area || (continues[c] && area >= min_area / 2);
   }
-  std::vector<uint8_t> labels(pixels, kStaticPixel);
   for (std::size_t i = 0; i < pixels; ++i) {
     if (kept[static_cast<std::size_t>(components.ptr<int>()[i])]) labels[i] = continuing[i] ? static_cast<uint8_t>(kArrived) : changed[i];
   }

@@ -15,7 +15,8 @@ struct RgbdFrame {
   std::vector<float> rgb;    // [H, W, 3]
   std::vector<float> depth;  // [H, W]
   // [H, W] or empty (none): non-zero where the pixel shows no part of the static scene (a moving
-  // object), left out of tracking and mapping.
+  // object), left out of tracking and mapping; the value is the caller's reason (the larger wins
+  // when downsampled).
   std::vector<uint8_t> ignore;
   // [H, W] or empty (none): class ids from a segmenter, 0 = unknown.
   std::vector<uint16_t> labels;
