@@ -168,6 +168,8 @@ int run_cli(int argc, char** argv) {
   render_cmd->add_option("--fps", render.fps, "Frame rate of the mp4")->check(CLI::Range(1.0, 240.0))->capture_default_str();
   render_cmd->add_option("--background", render.background, "Background RGB r,g,b in [0, 1]")->capture_default_str();
   render_cmd->add_flag("--overwrite", render.overwrite, "Replace the views of an earlier render in --out");
+  render_cmd->add_flag("--labels", render.labels, "Draw the map's classes (fixed palette) instead of its colours");
+  render_cmd->add_option("--only", render.only, "Keep only the Gaussians of these classes: names (a run folder) or ids, comma-separated");
   add_backend_options(*render_cmd, render.backend);
 
   ReconstructOptions recon;

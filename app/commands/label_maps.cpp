@@ -41,7 +41,22 @@ nlohmann::json labels_summary(const LabelSet& set, const splat::GaussianLabels& 
       ++counts[set.name(labels.best(i))];
     }
   }
-  return {{"classes", counts}, {"unlabelled", unlabelled}};
+  std::map<std::string, uint16_t> ids;
+  for (const LabelClass& c : set.classes) ids[c.name] = c.id;
+  return {{"classes", counts}, {"unlabelled", unlabelled}, {"ids", ids}};
+}
+
+std::vector<uint8_t> label_colours(const std::vector<uint16_t>& labels) {
+  // Twelve well-separated colours, cycled by id; unknown (0) is black.
+  static const uint8_t palette[12][3] = {{230, 25, 75},  {60, 180, 75},   {255, 225, 25}, {0, 130, 200},
+                                         {245, 130, 48}, {145, 30, 180},  {70, 240, 240}, {240, 50, 230},
+                                         {210, 245, 60}, {250, 190, 212}, {0, 128, 128},  {170, 110, 40}};
+  std::vector<uint8_t> rgb(labels.size() * 3, 0);
+  for (std::size_t p = 0; p < labels.size(); ++p) {
+    if (labels[p] == 0) continue;
+    for (int c = 0; c < 3; ++c) rgb[p * 3 + static_cast<std::size_t>(c)] = palette[(labels[p] - 1) % 12][c];
+  }
+  return rgb;
 }
 
 void LabelScore::add(const std::vector<uint16_t>& rendered, const std::vector<uint16_t>& given) {

@@ -34,6 +34,9 @@ splat::GaussianLabels fuse_labels(const Dataset& dataset, const std::vector<Eige
 // What the map holds, for summary.json: {"classes": {"floor": Gaussians, ...}, "unlabelled": N}.
 nlohmann::json labels_summary(const LabelSet& set, const splat::GaussianLabels& labels);
 
+// Label images drawn in a fixed palette (unknown: black), [H, W, 3] 8-bit.
+std::vector<uint8_t> label_colours(const std::vector<uint16_t>& labels);
+
 // Intersection over union per class between rendered and given labels, summed over views. Pixels
 // given 0 (unknown) or a dynamic class (the map holds the static scene) are not scored.
 class LabelScore {

@@ -1,5 +1,6 @@
 #include "commands/render_command.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,10 +13,13 @@
 #include "io/image_io.h"
 #include "io/video_io.h"
 #include "io/map_io.h"
+#include "commands/label_maps.h"
 #include "commands/map_up.h"
 #include "commands/progress.h"
 #include "commands/run_input.h"
 #include "io/trajectory.h"
+#include "mapping/gaussian_adam.h"
+#include "mapping/label_fusion.h"
 #include "viewer/views.h"
 #include "splat/error.h"
 
@@ -154,6 +158,58 @@ void refuse_earlier_render(const std::filesystem::path& out, bool overwrite) {
   }
 }
 
+// The class ids `only` names: ids, or names the run's summary.json lists ("labels"."ids").
+std::vector<uint16_t> wanted_classes(const std::string& only, const std::filesystem::path& map_argument) {
+  nlohmann::json ids = nlohmann::json::object();
+  const std::filesystem::path summary = map_argument / "summary.json";
+  if (std::filesystem::is_directory(map_argument) && std::filesystem::exists(summary)) {
+    std::ifstream in(summary);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_object() && j.contains("labels") && j["labels"].contains("ids")) ids = j["labels"]["ids"];
+  }
+  std::vector<uint16_t> wanted;
+  std::stringstream ss(only);
+  for (std::string item; std::getline(ss, item, ',');) {
+    char* end = nullptr;
+    const long id = std::strtol(item.c_str(), &end, 10);
+    if (!item.empty() && *end == '\0' && id >= 1 && id <= 65535) {
+      wanted.push_back(static_cast<uint16_t>(id));
+    } else if (ids.contains(item) && ids[item].is_number_unsigned()) {
+      wanted.push_back(ids[item].get<uint16_t>());
+    } else {
+      std::string known;
+      for (const auto& [name, value] : ids.items()) known += (known.empty() ? "" : ", ") + name;
+      throw splat::Error("--only: unknown class '" + item + "' (" +
+                         (known.empty() ? std::string("give class ids, or a run folder whose summary.json names them")
+                                        : "the run's classes: " + known) +
+                         ")");
+    }
+  }
+  if (wanted.empty()) throw splat::Error("--only '" + only + "': expected comma-separated class names or ids");
+  return wanted;
+}
+
+// Keeps the Gaussians whose most probable class is one of `wanted` (and their labels).
+void keep_classes(LoadedMap& map, const std::vector<uint16_t>& wanted) {
+  std::vector<uint8_t> keep(map.gaussians.size());
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    keep[i] = std::find(wanted.begin(), wanted.end(), map.labels.best(i)) != wanted.end();
+  }
+  const auto top = static_cast<std::size_t>(map.labels.top);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    for (std::size_t k = 0; k < top; ++k) {
+      map.labels.ids[out * top + k] = map.labels.ids[i * top + k];
+      map.labels.probabilities[out * top + k] = map.labels.probabilities[i * top + k];
+    }
+    ++out;
+  }
+  map.labels.ids.resize(out * top);
+  map.labels.probabilities.resize(out * top);
+  mapping::remove_gaussians(map.gaussians, keep);
+}
+
 }  // namespace
 
 int run_render(const RenderOptions& o) {
@@ -166,6 +222,15 @@ int run_render(const RenderOptions& o) {
   const Scene scene = scene_of(o);
   LoadedMap map = load_map(scene.map);
   for (const auto& notice : map.notices) std::fprintf(stderr, "notice: %s\n", notice.c_str());
+  if ((o.labels || !o.only.empty()) && map.labels.empty()) {
+    throw splat::Error(scene.map.string() + ": the map has no classes (--labels, --only): reconstruct a sequence with "
+                       "label images to make one");
+  }
+  if (!o.only.empty()) {
+    keep_classes(map, wanted_classes(o.only, o.map));
+    if (map.gaussians.empty()) throw splat::Error("--only " + o.only + ": no Gaussian of the map is of these classes");
+    std::fprintf(stderr, "--only %s: %zu Gaussians kept\n", o.only.c_str(), map.gaussians.size());
+  }
   const Views views = views_of(o, scene, map.gaussians);
   const std::vector<splat::Camera>& cameras = views.cameras;
   std::fprintf(stderr, "%s\n", views.description.c_str());
@@ -181,7 +246,12 @@ int run_render(const RenderOptions& o) {
     Progress progress("render", cameras.size(), "views");
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto start = std::chrono::steady_clock::now();
-      const splat::ForwardResult frame = rasterizer->forward(map.gaussians, cameras[i], settings);
+      splat::ForwardResult frame = rasterizer->forward(map.gaussians, cameras[i], settings);
+      if (o.labels) {  // the classes instead of the colours, in the palette
+        const std::vector<uint8_t> colours =
+            label_colours(mapping::render_labels(*rasterizer, map.gaussians, map.labels, cameras[i]));
+        for (std::size_t k = 0; k < colours.size(); ++k) frame.rgb[k] = static_cast<float>(colours[k]) / 255.f;
+      }
       render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       char name[32];
       std::snprintf(name, sizeof(name), "view_%04zu", i);

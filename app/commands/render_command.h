@@ -25,6 +25,8 @@ struct RenderOptions {
   std::string background = "0,0,0";  // RGB in [0, 1]
   BackendChoice backend;
   bool overwrite = false;            // replace the views of an earlier render in `out`
+  bool labels = false;               // draw the map's classes (a fixed palette) instead of colour
+  std::string only;                  // comma-separated classes (names or ids) whose Gaussians are kept
 };
 
 // `gslam render`: renders a map into DIR/view_NNNN.{png,exr} and/or DIR/render.mp4:
@@ -33,6 +35,9 @@ struct RenderOptions {
 //   (viewer/views.h novel_path); --path chooses either way;
 // - or on an orbit: about the centre at the cameras' height with their up where the map has
 //   poses, else at 2.5 map radii about --up.
+// With `labels`, each view shows the most probable class per pixel (a map with labels: a run of
+// a sequence with label images); `only` keeps the Gaussians of the named classes, resolved by
+// the run's summary.json (names) or given as ids.
 // Refuses an `out` that holds an earlier render's views unless `overwrite` (which removes them).
 // Prints the path used, progress and a one-line summary; returns the process exit code. Throws
 // splat::Error.

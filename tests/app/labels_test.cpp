@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/run_gslam.h"
+#include "commands/label_maps.h"
 #include "datasets/dataset.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
@@ -50,6 +51,32 @@ void corrupt_labels(const std::filesystem::path& from, const std::filesystem::pa
   }
 }
 
+// render --labels draws the classes at the run's first pose in the palette that the given label
+// image takes there; --only keeps the Gaussians of the classes named.
+void expect_renders_classes(const TempDir& dir, const std::string& run) {
+  const std::string out = (dir / "render").string();
+  const RunResult r = run_gslam("render " + run + " --out " + out + " --labels --path recorded");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const app::Dataset d = app::open_dataset(dir / "seq", {});
+  const std::vector<uint8_t> expected = app::label_colours(d.load(0).labels);
+  const splat::Image8 drawn = app::read_png_rgb8(std::filesystem::path(out) / "view_0000.png");
+  ASSERT_EQ(drawn.data.size(), expected.size());
+  std::size_t same = 0;
+  for (std::size_t p = 0; p < expected.size(); p += 3) {
+    same += std::equal(expected.begin() + static_cast<std::ptrdiff_t>(p), expected.begin() + static_cast<std::ptrdiff_t>(p + 3),
+                       drawn.data.begin() + static_cast<std::ptrdiff_t>(p));
+  }
+  EXPECT_GT(static_cast<double>(same) / static_cast<double>(expected.size() / 3), 0.9);
+
+  const RunResult only = run_gslam("render " + run + " --out " + (dir / "balls").string() + " --only ball --orbit 2");
+  ASSERT_EQ(only.exit_code, 0) << only.output;
+  EXPECT_NE(only.output.find("--only ball: "), std::string::npos) << only.output;
+  const RunResult unknown = run_gslam("render " + run + " --out " + (dir / "sofas").string() + " --only sofa");
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_EQ(last_line(unknown.output),
+            "error: --only: unknown class 'sofa' (the run's classes: ball, cabinet, ceiling, chair, crate, floor, person, wall)\n");
+}
+
 TEST(CliLabels, FusedClassesRenderBackOnHeldOutViewsEvenFromNoisyLabels) {
   TempDir dir;
   const std::string seq = (dir / "seq").string();
@@ -85,6 +112,7 @@ TEST(CliLabels, FusedClassesRenderBackOnHeldOutViewsEvenFromNoisyLabels) {
     EXPECT_GE(held_out, noisy ? 0.85 : 0.9);
     EXPECT_EQ(labels_eval.at("held_out").at("views").get<int>(), 6);  // frames 0, 8, ..., 40
     for (const char* name : {"wall", "floor", "ball", "cabinet"}) EXPECT_TRUE(labels_eval.at("per_class").contains(name)) << name;
+    if (!noisy) expect_renders_classes(dir, run);
   }
 }
 
