@@ -139,17 +139,27 @@ class Scene {
 };
 
 // What moves through the room with SyntheticOptions::movers, at `seconds` into the sequence: a
-// person (1.78 m, 0.44 m wide) walking across the room at 1.3 m/s between the camera and the
-// objects, a chair pushed a metre along the floor and left there, and a crate that appears on
-// the floor. Positions for the arc path (the default), which looks across them.
+// person (1.78 m, 0.44 m wide) walking in at 1.3 m/s between the camera and the objects, standing
+// a while and walking out again; a chair pushed a metre along the floor and left there; and a
+// crate that appears on the floor. Positions for the arc path (the default), which looks across
+// them; swept_by_movers() says where they have been.
 class Movers {
  public:
+  // The person: walks in along z = -0.5 from x = -2.2 at 0.3 s to x = 0.25 (short of the blue
+  // ball), stands until 2.8 s, walks back out (gone at 4.7 s). Walked distance for the stride.
+  static constexpr double kPersonZ = -0.5, kFrom = -2.2, kStop = 0.25, kSpeed = 1.3;
+  static constexpr double kEnter = 0.3, kTurn = 2.8;
+  static bool person_at(double seconds, double& x, double& walked) {
+    const double in = (seconds - kEnter) * kSpeed, out = (seconds - kTurn) * kSpeed;
+    if (in <= 0 || out >= kStop - kFrom) return false;
+    walked = std::min(in, kStop - kFrom) + std::max(out, 0.0);
+    x = out > 0 ? kStop - out : std::min(kFrom + in, kStop);
+    return true;
+  }
   static void intersect(const Vector3d& o, const Vector3d& d, double seconds, Hit& hit) {
-    // The person: from x = -2.2 from 0.3 s, across to x = 2.2, a slight bob at the stride.
-    constexpr double kStart = 0.3, kSpeed = 1.3, kFrom = -2.2, kTo = 2.2;
-    const double walked = (seconds - kStart) * kSpeed;
-    if (walked > 0 && kFrom + walked < kTo) {
-      const double x = kFrom + walked, z = -0.5, bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
+    double x = 0, walked = 0;
+    if (person_at(seconds, x, walked)) {
+      const double z = kPersonZ, bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
       const Vector3d lo(x - 0.22, -0.05 + bob, z - 0.13), hi(x + 0.22, 1.5, z + 0.13);
       if (Scene::box(o, d, lo, hi, hit, kPerson)) {
         // A shirt with stripes above the waist, dark trousers below.
@@ -166,7 +176,7 @@ class Movers {
       hit.color = Vector3d(0.55, 0.35, 0.15) * (0.7 + 0.3 * checker(hit.point.x() + hit.point.z(), hit.point.y(), 0.15));
     }
     // The crate: there from 2.8 s on.
-    if (seconds >= 2.8) Scene::box(o, d, Vector3d(-0.4, 1.2, -0.3), Vector3d(0.0, 1.5, 0.1), hit, kCrate);
+    if (seconds >= 2.8) Scene::box(o, d, Vector3d(-0.1, 1.2, -0.3), Vector3d(0.3, 1.5, 0.1), hit, kCrate);
   }
 };
 
@@ -256,6 +266,17 @@ bool edge_of_mover(const std::vector<double>& z, const std::vector<uint8_t>& mov
 }
 
 }  // namespace
+
+bool swept_by_movers(const Eigen::Vector3d& p, double margin) {
+  const auto inside = [&](const Vector3d& lo, const Vector3d& hi) {
+    return (p.array() > lo.array() + margin).all() && (p.array() < hi.array() - margin).all();
+  };
+  const double z = Movers::kPersonZ;
+  // The person's path, head included; the chair's path short of where it was left, as far as
+  // the arc's camera sees it once the chair has moved (x < 1.3: beyond, no view shows it empty).
+  return inside(Vector3d(Movers::kFrom - 0.22, -0.28, z - 0.13), Vector3d(Movers::kStop + 0.22, 1.5, z + 0.13)) ||
+         inside(Vector3d(0.92, 0.6, 0.08), Vector3d(1.3, 1.5, 0.52));
+}
 
 SyntheticOptions SyntheticOptions::hard_motion() {
   SyntheticOptions o;

@@ -2,6 +2,8 @@
 #include <cstdint>
 #include <filesystem>
 
+#include <Eigen/Core>
+
 namespace app {
 
 struct SyntheticOptions {
@@ -47,5 +49,11 @@ struct SyntheticOptions {
 // come from a ray caster of a textured room with spheres and boxes, independent of the splat
 // renderer, so reconstruction is never tested on its own image model. Deterministic.
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& options);
+
+// Whether world point `p` lies, by more than `margin` metres, inside space that
+// SyntheticOptions::movers' person and chair passed through, that they leave empty by 4.7 s, and
+// that the arc's camera then sees empty (a map of a sequence at least that long should hold
+// nothing there: what it holds are ghosts).
+bool swept_by_movers(const Eigen::Vector3d& p, double margin);
 
 }  // namespace app

@@ -37,6 +37,8 @@ void MapperConfig::validate(const std::string& prefix) const {
   check.positive("seed_scale_factor", seed.scale_factor);
   check.in_range("sh_degree", seed.sh_degree, 0, 3);
   check.in_range("prune_opacity", prune_opacity, 0.0, 1.0 - 1e-6);
+  check.at_least("ghost_views", ghost_views, 1);
+  check.at_least("free_space_margin", free_space_margin, 0.0);
   check.positive("prune_max_scale", prune_max_scale);
   check.at_least("pose_learning_rate", pose_learning_rate, 0.0);
   check.at_least("pose_rotation_learning_rate", pose_rotation_learning_rate, 0.0);
@@ -66,7 +68,10 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
       const bool uncovered = render.alpha[p] < config_.densify_alpha;
       // Something measured in front of the map that the map does not have.
       const bool in_front = f.depth[p] > 0 && render.depth_normalized[p] - f.depth[p] > config_.depth_error_factor * std::max(median, 1e-3f);
-      mask[p] = uncovered || in_front ? 1.f : 0.f;
+      // Measured behind the map: the camera sees through it (see MapperConfig::seed_behind).
+      const bool behind = config_.seed_behind && f.depth[p] > 0 && render.alpha[p] >= config_.densify_alpha &&
+                          f.depth[p] - render.depth_normalized[p] > config_.depth_error_factor * std::max(median, 1e-3f);
+      mask[p] = uncovered || in_front || behind ? 1.f : 0.f;
     }
   }
   if (!f.ignore.empty()) {
@@ -82,6 +87,8 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
   const std::size_t added = seed_from_depth(fill_holes ? filled : f, T_cam_world.inverse(), config_.seed, map_, mask);
   adam_.append(added, map_.sh_degree);
   anchors_.resize(map_.size(), static_cast<uint32_t>(anchor));
+  seen_through_.resize(map_.size(), 0);
+  seen_on_.resize(map_.size(), 0);
   return added;
 }
 
@@ -201,14 +208,50 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   return loss;
 }
 
+void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world) {
+  const int w = f.width(), h = f.height();
+  const Eigen::Matrix3f r = T_cam_world.linear().cast<float>();
+  const Eigen::Vector3f t = T_cam_world.translation().cast<float>();
+  seen_through_.resize(map_.size(), 0);
+  seen_on_.resize(map_.size(), 0);
+  for (std::size_t i = 0; i < map_.size(); ++i) {
+    const Eigen::Vector3f p = r * Eigen::Vector3f(map_.means[i * 3], map_.means[i * 3 + 1], map_.means[i * 3 + 2]) + t;
+    if (!(p.z() > 0.1f)) continue;
+    const float u = static_cast<float>(f.camera.fx) * p.x() / p.z() + static_cast<float>(f.camera.cx);
+    const float v = static_cast<float>(f.camera.fy) * p.y() / p.z() + static_cast<float>(f.camera.cy);
+    if (!(u >= 1 && v >= 1 && u < static_cast<float>(w - 1) && v < static_cast<float>(h - 1))) continue;
+    const int x = static_cast<int>(u), y = static_cast<int>(v);
+    const float margin = static_cast<float>(config_.free_space_margin) + 0.02f * p.z();
+    bool through = true, measured = true, on = false;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const std::size_t j = static_cast<std::size_t>(y + dy) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x + dx);
+        const float z = f.depth[j];
+        if (!(z > 0) || (!f.ignore.empty() && f.ignore[j])) {
+          measured = false;
+          continue;
+        }
+        through = through && z > p.z() + margin;
+        on = on || std::abs(z - p.z()) <= margin;
+      }
+    }
+    if (!measured) continue;
+    if (through && seen_through_[i] < UINT16_MAX) ++seen_through_[i];
+    if (on && seen_on_[i] < UINT16_MAX) ++seen_on_[i];
+  }
+}
+
 std::size_t Mapper::prune() {
   std::vector<uint8_t> keep(map_.size(), 1);
+  seen_through_.resize(map_.size(), 0);
+  seen_on_.resize(map_.size(), 0);
   const float min_logit = static_cast<float>(std::log(config_.prune_opacity / (1 - config_.prune_opacity)));
   const float max_log_scale = static_cast<float>(std::log(config_.prune_max_scale));
   std::size_t removed = 0;
   for (std::size_t i = 0; i < map_.size(); ++i) {
     const float largest = std::max({map_.log_scales[i * 3], map_.log_scales[i * 3 + 1], map_.log_scales[i * 3 + 2]});
-    if (map_.opacity_logits[i] < min_logit || largest > max_log_scale) {
+    const bool ghost = seen_through_[i] >= config_.ghost_views && seen_through_[i] > 2 * seen_on_[i];
+    if (map_.opacity_logits[i] < min_logit || largest > max_log_scale || ghost) {
       keep[i] = 0;
       ++removed;
     }
@@ -218,8 +261,10 @@ std::size_t Mapper::prune() {
     adam_.remove(keep);
     std::size_t out = 0;
     for (std::size_t i = 0; i < keep.size(); ++i)
-      if (keep[i]) anchors_[out++] = anchors_[i];
+      if (keep[i]) anchors_[out] = anchors_[i], seen_through_[out] = seen_through_[i], seen_on_[out++] = seen_on_[i];
     anchors_.resize(out);
+    seen_through_.resize(out);
+    seen_on_.resize(out);
   }
   return removed;
 }
@@ -232,7 +277,10 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
                       int iterations, bool densify_first) {
   if (map_.empty()) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
-  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
+  if (densify_first) {
+    observe_free_space(kf.frame, kf.T_cam_world);
+    densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
+  }
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
   T_cam_world = kf.T_cam_world;
@@ -299,6 +347,8 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   vignetting_adam_.steps = s.vignetting_steps;
   added_ = s.added;
   anchors_ = std::move(s.anchors);
+  seen_through_.assign(map_.size(), 0);
+  seen_on_.assign(map_.size(), 0);
   rng_ = restored_rng;
 }
 
@@ -327,6 +377,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   MappingStats stats;
   keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
+  observe_free_space(newest.frame, newest.T_cam_world);
   stats.added = densify(newest.frame, newest.T_cam_world, false, newest.number);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();

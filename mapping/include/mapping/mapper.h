@@ -60,6 +60,15 @@ struct MapperConfig {
   bool refine_seed_depth_holes = true;
   // Stride at the mapping resolution; seeds at 0.6x the pixel footprint rendered sharper.
   SeedConfig seed{.scale_factor = 0.6};
+  // Seed also where the measured depth lies behind the render by depth_error_factor x the median
+  // error: the camera sees through the map there (something that was there has gone).
+  bool seed_behind = false;
+  // Ghosts: a Gaussian whose centre a keyframe (or a densifying sweep visit) sees through, the
+  // measured depth at its pixel (all of its 3x3 neighbourhood) farther than it by free_space_margin
+  // + 2% of the depth, in at least ghost_views views and more than twice as often as it lies on
+  // the measured surface, is pruned: moving objects leave no ghosts.
+  int ghost_views = 3;
+  double free_space_margin = 0.05;  // metres
   // Pruning after each optimization.
   double prune_opacity = 0.005;
   double prune_max_scale = 0.5;  // metres
@@ -127,7 +136,7 @@ class Mapper {
                 int iterations, bool densify = false);
   // An input frame as refine() takes it: at refine_resolution_factor.
   splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
-  // Removes transparent and oversized Gaussians; returns how many.
+  // Removes transparent, oversized and ghost Gaussians; returns how many.
   std::size_t prune();
   // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
   // anchors) by world_correction[k] (T_world_new * T_world_old^-1), for every keyframe added so
@@ -180,6 +189,11 @@ class Mapper {
   } vignetting_adam_;
   std::size_t added_ = 0;
   std::vector<uint32_t> anchors_;  // per Gaussian, aligned with map_
+  // Per Gaussian, aligned with map_: views that saw through its centre, and views whose surface
+  // it lies on (not kept in checkpoints: they start over on a restored run).
+  std::vector<uint16_t> seen_through_, seen_on_;
+  // Counts a view's evidence for each Gaussian (ignored pixels tell nothing).
+  void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
   std::mt19937 rng_;
 };
 
