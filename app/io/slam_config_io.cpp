@@ -123,7 +123,6 @@ std::vector<Field> fields(SlamConfig& c) {
       {"mapping", "seed_scale_factor", &m.seed.scale_factor},
       {"mapping", "sh_degree", &m.seed.sh_degree},
       {"mapping", "prune_opacity", &m.prune_opacity},
-      {"mapping", "seed_behind", &m.seed_behind},
       {"mapping", "ghost_views", &m.ghost_views},
       {"mapping", "free_space_margin", &m.free_space_margin},
       {"mapping", "prune_max_scale", &m.prune_max_scale},

@@ -68,10 +68,7 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
       const bool uncovered = render.alpha[p] < config_.densify_alpha;
       // Something measured in front of the map that the map does not have.
       const bool in_front = f.depth[p] > 0 && render.depth_normalized[p] - f.depth[p] > config_.depth_error_factor * std::max(median, 1e-3f);
-      // Measured behind the map: the camera sees through it (see MapperConfig::seed_behind).
-      const bool behind = config_.seed_behind && f.depth[p] > 0 && render.alpha[p] >= config_.densify_alpha &&
-                          f.depth[p] - render.depth_normalized[p] > config_.depth_error_factor * std::max(median, 1e-3f);
-      mask[p] = uncovered || in_front || behind ? 1.f : 0.f;
+      mask[p] = uncovered || in_front ? 1.f : 0.f;
     }
   }
   if (!f.ignore.empty()) {

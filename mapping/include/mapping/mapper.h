@@ -60,9 +60,6 @@ struct MapperConfig {
   bool refine_seed_depth_holes = true;
   // Stride at the mapping resolution; seeds at 0.6x the pixel footprint rendered sharper.
   SeedConfig seed{.scale_factor = 0.6};
-  // Seed also where the measured depth lies behind the render by depth_error_factor x the median
-  // error: the camera sees through the map there (something that was there has gone).
-  bool seed_behind = false;
   // Ghosts: a Gaussian whose centre a keyframe (or a densifying sweep visit) sees through, the
   // measured depth at its pixel (all of its 3x3 neighbourhood) farther than it by free_space_margin
   // + 2% of the depth, in at least ghost_views views and more than twice as often as it lies on
