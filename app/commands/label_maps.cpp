@@ -1,35 +1,12 @@
 #include "commands/label_maps.h"
 
+#include "commands/progress.h"
 #include "mapping/label_fusion.h"
 #include "splat/error.h"
 
 namespace app {
 
-splat::GaussianLabels fuse_labels(const Dataset& dataset, const std::vector<Eigen::Isometry3d>& T_world_cam,
-                                  const std::function<bool(std::size_t)>& use, const splat::Gaussians& map,
-                                  splat::Rasterizer& rasterizer, int max_views, int factor,
-                                  const std::function<void(std::size_t, std::size_t)>& visited) {
-  if (!dataset.labels || map.empty() || max_views <= 0) return {};
-  std::vector<std::size_t> candidates;
-  for (std::size_t i = 0; i < dataset.entries.size() && i < T_world_cam.size(); ++i) {
-    if (use(i)) candidates.push_back(i);
-  }
-  std::vector<std::size_t> chosen;
-  const std::size_t wanted = std::min(candidates.size(), static_cast<std::size_t>(max_views));
-  for (std::size_t k = 0; k < wanted; ++k) chosen.push_back(candidates[k * candidates.size() / wanted]);
-  mapping::LabelFusion fusion(map.size());
-  for (std::size_t k = 0; k < chosen.size(); ++k) {
-    const std::size_t i = chosen[k];
-    splat::RgbdFrame frame = dataset.load(i);
-    if (!frame.labels.empty()) {
-      const splat::RgbdFrame small = splat::downsample(frame, factor);
-      fusion.add_view(rasterizer, map, splat::posed(small.camera, T_world_cam[i].inverse()), small.labels);
-    }
-    if (visited) visited(k + 1, chosen.size());
-  }
-  if (fusion.views() == 0) return {};
-  return fusion.result();
-}
+namespace {
 
 nlohmann::json labels_summary(const LabelSet& set, const splat::GaussianLabels& labels) {
   std::map<std::string, std::size_t> counts;
@@ -44,6 +21,41 @@ nlohmann::json labels_summary(const LabelSet& set, const splat::GaussianLabels& 
   std::map<std::string, uint16_t> ids;
   for (const LabelClass& c : set.classes) ids[c.name] = c.id;
   return {{"classes", counts}, {"unlabelled", unlabelled}, {"ids", ids}};
+}
+
+}  // namespace
+
+void fuse_run_labels(const Dataset& dataset, const std::vector<Eigen::Isometry3d>& poses, const splat::Gaussians& map,
+                     splat::Rasterizer& rasterizer, int factor, RunOutputs& outputs) {
+  if (!dataset.labels || map.empty()) return;
+  // The run's usable frames as (dataset entry, pose), by timestamp.
+  const std::vector<FrameRecord>& records = outputs.records();
+  std::vector<double> entry_times, record_times;
+  for (const DatasetEntry& e : dataset.entries) entry_times.push_back(e.timestamp);
+  for (const FrameRecord& r : records) record_times.push_back(r.timestamp);
+  std::vector<std::pair<std::size_t, Eigen::Isometry3d>> usable;
+  for (const auto& [entry, record] : associate(entry_times, record_times, 1e-4)) {
+    if (record < poses.size() && records[record].tracked && !records[record].held_out) usable.emplace_back(entry, poses[record]);
+  }
+  std::sort(usable.begin(), usable.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const std::size_t views = std::min(usable.size(), kLabelViews);
+  if (views == 0) return;
+  Progress progress("labels", views, "views");
+  mapping::LabelFusion fusion(map.size());
+  for (std::size_t k = 0; k < views; ++k) {
+    const auto& [entry, T_world_cam] = usable[k * usable.size() / views];
+    const splat::RgbdFrame frame = dataset.load(entry);
+    if (!frame.labels.empty()) {
+      const splat::RgbdFrame small = splat::downsample(frame, factor);
+      fusion.add_view(rasterizer, map, splat::posed(small.camera, T_world_cam.inverse()), small.labels);
+    }
+    progress.update(k + 1);
+  }
+  progress.finish();
+  if (fusion.views() == 0) return;
+  const splat::GaussianLabels labels = fusion.result();
+  outputs.extra()["labels"] = labels_summary(*dataset.labels, labels);
+  outputs.set_labels(labels);
 }
 
 std::vector<uint8_t> label_colours(const std::vector<uint16_t>& labels) {

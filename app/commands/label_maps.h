@@ -2,7 +2,6 @@
 // map renders them back (mIoU), for reconstruct and eval.
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <set>
 #include <string>
@@ -11,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "commands/run_outputs.h"
 #include "datasets/dataset.h"
 #include "splat/gaussian_labels.h"
 #include "splat/gaussians.h"
@@ -18,21 +18,19 @@
 
 namespace app {
 
-// Label images fused into the map by reconstruct: views spread over the sequence (enough for
-// every class to be seen from several sides; each costs a render and a backward pass per three
-// classes).
+// Label images fused into the map at the end of reconstruct and live: views spread over the
+// sequence (enough for every class to be seen from several sides; each costs a render and a
+// backward pass per three classes).
 inline constexpr std::size_t kLabelViews = 60;
 
-// Votes of up to `max_views` frames, spread evenly over those `use(i)` accepts, each at 1/factor
-// resolution with its pose T_world_cam[i]; frames without a label image are passed over.
-// `visited(done, total)` after each. Empty labels if the dataset has none.
-splat::GaussianLabels fuse_labels(const Dataset& dataset, const std::vector<Eigen::Isometry3d>& T_world_cam,
-                                  const std::function<bool(std::size_t)>& use, const splat::Gaussians& map,
-                                  splat::Rasterizer& rasterizer, int max_views, int factor,
-                                  const std::function<void(std::size_t, std::size_t)>& visited = {});
-
-// What the map holds, for summary.json: {"classes": {"floor": Gaussians, ...}, "unlabelled": N}.
-nlohmann::json labels_summary(const LabelSet& set, const splat::GaussianLabels& labels);
+// Votes of up to kLabelViews of the run's tracked frames that were not held out (matched to the
+// dataset's entries by timestamp), spread over the run, each at 1/factor resolution with its
+// pose in `poses` (one per record); frames without a label image are passed over. Shows
+// progress. The map's classes go to `outputs` (map.ply, and "labels" in summary.json:
+// {"classes": {"floor": Gaussians, ...}, "unlabelled": N, "ids": {"floor": 2, ...}}). Nothing
+// if the dataset has no label images or the map is empty.
+void fuse_run_labels(const Dataset& dataset, const std::vector<Eigen::Isometry3d>& poses, const splat::Gaussians& map,
+                     splat::Rasterizer& rasterizer, int factor, RunOutputs& outputs);
 
 // Label images drawn in a fixed palette (unknown: black), [H, W, 3] 8-bit.
 std::vector<uint8_t> label_colours(const std::vector<uint16_t>& labels);

@@ -1,6 +1,7 @@
 #include "commands/live_command.h"
 
 #include "commands/interrupt.h"
+#include "commands/label_maps.h"
 
 #include <algorithm>
 #include <atomic>
@@ -283,6 +284,10 @@ int run_live(const LiveOptions& o) {
                              {"interrupted", interrupted}};
   outputs.set_stopping(interrupted);
   const std::shared_ptr<const splat::Gaussians> map = live.map();
+  if (!o.watch && !interrupted && map) {  // the map's classes, from the recording's label images if it has them
+    fuse_run_labels(open_dataset(o.source, o.dataset_options), live.trajectory(), *map, *mapping_rasterizer,
+                    config.mapping.refine_resolution_factor, outputs);
+  }
   const splat::Gaussians empty;
   outputs.finish(map ? *map : empty, live.keyframes(), *tracking_rasterizer, source->intrinsics(), truth);
   std::printf(

@@ -161,17 +161,8 @@ int run_reconstruct(const ReconstructOptions& o) {
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   outputs.set_mapping(slam.mapping_totals(), slam.loop_events());
-  if (dataset.labels && !InterruptGuard::interrupted() && !slam.map()->empty()) {
-    // The map's classes, voted by the tracked frames' label images (held-out views excepted).
-    const std::vector<FrameRecord>& records = outputs.records();
-    Progress label_progress("labels", std::min<std::size_t>(records.size(), kLabelViews), "views");
-    const splat::GaussianLabels labels = fuse_labels(
-        dataset, slam.trajectory(), [&](std::size_t i) { return i < records.size() && records[i].tracked && !records[i].held_out; },
-        *slam.map(), *rasterizer, static_cast<int>(kLabelViews), config.mapping.refine_resolution_factor,
-        [&](std::size_t done, std::size_t) { label_progress.update(done, ""); });
-    label_progress.finish();
-    outputs.set_labels(labels);
-    outputs.extra()["labels"] = labels_summary(*dataset.labels, labels);
+  if (!InterruptGuard::interrupted()) {  // the map's classes, from the label images if there are any
+    fuse_run_labels(dataset, slam.trajectory(), *slam.map(), *rasterizer, config.mapping.refine_resolution_factor, outputs);
   }
   const bool interrupted = InterruptGuard::interrupted();
   outputs.extra()["interrupted"] = interrupted;

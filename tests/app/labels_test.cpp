@@ -114,6 +114,13 @@ TEST(CliLabels, FusedClassesRenderBackOnHeldOutViewsEvenFromNoisyLabels) {
     for (const char* name : {"wall", "floor", "ball", "cabinet"}) EXPECT_TRUE(labels_eval.at("per_class").contains(name)) << name;
     if (!noisy) expect_renders_classes(dir, run);
   }
+  // live fuses the recording's label images too.
+  const std::filesystem::path live = dir / "live";
+  const RunResult l = run_gslam("live " + seq + " --out " + live.string() + " --headless --every-frame");
+  ASSERT_EQ(l.exit_code, 0) << l.output;
+  const app::LoadedMap live_map = app::load_map(live / "map.ply");
+  EXPECT_EQ(live_map.labels.size(), live_map.gaussians.size());
+  EXPECT_GT(read_json(live / "summary.json").at("labels").at("classes").at("floor").get<std::size_t>(), 0u);
 }
 
 TEST(CliLabels, BadLabelFoldersAreOneLineErrors) {
