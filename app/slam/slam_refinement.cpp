@@ -77,8 +77,11 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       if (mapper_.map().size() != published) publish(), published = mapper_.map().size();
       if (visited) visited(++result.visits, total);
     }
+    // The densifying passes have weighed every frame's view of each Gaussian: ghosts go now, and
+    // the passes left heal what they covered.
+    if (pass + 1 == config_.refine_densify_passes) result.pruned += mapper_.prune();
   }
-  result.pruned = mapper_.prune();
+  result.pruned += mapper_.prune();
   if (config_.relocalize_iterations > 0) {
     tracking::TrackingConfig t = config_.tracking;
     t.pyramid = {t.pyramid.back()};

@@ -60,10 +60,10 @@ struct MapperConfig {
   bool refine_seed_depth_holes = true;
   // Stride at the mapping resolution; seeds at 0.6x the pixel footprint rendered sharper.
   SeedConfig seed{.scale_factor = 0.6};
-  // Ghosts: a Gaussian whose centre a keyframe (or a densifying sweep visit) sees through, the
-  // measured depth at its pixel (all of its 3x3 neighbourhood) farther than it by free_space_margin
-  // + 2% of the depth, in at least ghost_views views and more than twice as often as it lies on
-  // the measured surface, is pruned: moving objects leave no ghosts.
+  // Ghosts: a Gaussian whose centre keyframes (and the sweep's densifying visits) see through,
+  // the measured depth at its pixel (all of its 3x3 neighbourhood) farther than it by
+  // free_space_margin + 2% of the depth, in at least ghost_views views and more than twice as
+  // often as it lies on the surface, is pruned: moving objects leave no ghosts.
   int ghost_views = 3;
   double free_space_margin = 0.05;  // metres
   // Pruning after each optimization.
