@@ -11,7 +11,8 @@ namespace app {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "checkpoints hold little-endian arrays");
-constexpr char kMagic[] = "gslam checkpoint 1\n";
+constexpr char kMagic[] = "gslam checkpoint 2\n";
+constexpr char kOlderMagic[] = "gslam checkpoint 1\n";  // before the map's free-space counts
 using json = nlohmann::json;
 
 json vector_to_json(const double* v, int n) { return json(std::vector<double>(v, v + n)); }
@@ -176,6 +177,8 @@ void for_each_array(State& s, Visit visit) {
   for (splat::ParamGroup g : splat::kAllParamGroups) visit(splat::param_group(s.mapper.adam.v, g));
   visit(s.mapper.adam.steps);
   visit(s.mapper.anchors);
+  visit(s.mapper.seen_through);
+  visit(s.mapper.seen_on);
 }
 
 // Reads exactly the bytes the file has, never more than remain.
@@ -255,6 +258,9 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
   BoundedReader in(path);
   char magic[sizeof(kMagic) - 1];
   in.read(magic, sizeof(magic), "header");
+  if (std::memcmp(magic, kOlderMagic, sizeof(magic)) == 0) {
+    fail(path, "checkpoint of an older gslam, which this one cannot continue; run again without --resume");
+  }
   if (std::memcmp(magic, kMagic, sizeof(magic)) != 0) fail(path, "not a gslam checkpoint");
   std::uint64_t length = 0;
   in.read(&length, sizeof(length), "header length");

@@ -63,6 +63,10 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     std::lock_guard lock(mutex_);
     map_ = std::move(snapshot);
   };
+  // Every frame's view of each Gaussian, before the sweep: ghosts (what moving objects left) go
+  // now, and the densifying pass seeds what they covered.
+  for (const std::size_t i : frames) mapper_.observe_free_space(frame_at(i), T_world_cam[i].inverse());
+  result.pruned += mapper_.prune();
   for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
@@ -77,9 +81,6 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       if (mapper_.map().size() != published) publish(), published = mapper_.map().size();
       if (visited) visited(++result.visits, total);
     }
-    // The densifying passes have weighed every frame's view of each Gaussian: ghosts go now, and
-    // the passes left heal what they covered.
-    if (pass + 1 == config_.refine_densify_passes) result.pruned += mapper_.prune();
   }
   result.pruned += mapper_.prune();
   if (config_.relocalize_iterations > 0) {

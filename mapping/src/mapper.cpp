@@ -274,10 +274,7 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
                       int iterations, bool densify_first) {
   if (map_.empty()) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
-  if (densify_first) {
-    observe_free_space(kf.frame, kf.T_cam_world);
-    densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
-  }
+  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
   T_cam_world = kf.T_cam_world;
@@ -301,6 +298,8 @@ MapperState Mapper::state() const {
   s.vignetting_steps = vignetting_adam_.steps;
   s.added = added_;
   s.anchors = anchors_;
+  s.seen_through = seen_through_;
+  s.seen_on = seen_on_;
   std::ostringstream rng;
   rng << rng_;
   s.rng = rng.str();
@@ -316,6 +315,10 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   if (s.keyframes.size() > config_.max_keyframes || s.keyframes.size() > s.added) {
     throw splat::Error("Mapper::restore: " + std::to_string(s.keyframes.size()) + " stored keyframes of " +
                        std::to_string(s.added) + " added (at most " + std::to_string(config_.max_keyframes) + ")");
+  }
+  if (s.seen_through.size() != s.map.size() || s.seen_on.size() != s.map.size()) {
+    throw splat::Error("Mapper::restore: free-space counts for " + std::to_string(s.seen_through.size()) + " and " +
+                       std::to_string(s.seen_on.size()) + " Gaussians, the map has " + std::to_string(s.map.size()));
   }
   if (s.anchors.size() != s.map.size()) {
     throw splat::Error("Mapper::restore: " + std::to_string(s.anchors.size()) + " anchors for " +
@@ -344,8 +347,8 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   vignetting_adam_.steps = s.vignetting_steps;
   added_ = s.added;
   anchors_ = std::move(s.anchors);
-  seen_through_.assign(map_.size(), 0);
-  seen_on_.assign(map_.size(), 0);
+  seen_through_ = std::move(s.seen_through);
+  seen_on_ = std::move(s.seen_on);
   rng_ = restored_rng;
 }
 

@@ -95,7 +95,7 @@ TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("long.bin", bytes + "x")), "long.bin", "1 bytes after");
   // A header length, then an array length, claiming far more than the file holds.
   std::string huge_header = bytes;
-  const std::size_t magic = std::string("gslam checkpoint 1\n").size();
+  const std::size_t magic = std::string("gslam checkpoint 2\n").size();
   huge_header[magic + 6] = '\x7f';
   GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("header.bin", huge_header)), "header.bin", "truncated");
   std::uint64_t header_length = 0;

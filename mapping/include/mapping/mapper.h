@@ -60,7 +60,7 @@ struct MapperConfig {
   bool refine_seed_depth_holes = true;
   // Stride at the mapping resolution; seeds at 0.6x the pixel footprint rendered sharper.
   SeedConfig seed{.scale_factor = 0.6};
-  // Ghosts: a Gaussian whose centre keyframes (and the sweep's densifying visits) see through,
+  // Ghosts: a Gaussian whose centre keyframes (and every frame before the final sweep) see through,
   // the measured depth at its pixel (all of its 3x3 neighbourhood) farther than it by
   // free_space_margin + 2% of the depth, in at least ghost_views views and more than twice as
   // often as it lies on the surface, is pruned: moving objects leave no ghosts.
@@ -110,6 +110,7 @@ struct MapperState {
   int vignetting_steps = 0;
   std::size_t added = 0;  // keyframes added so far
   std::vector<uint32_t> anchors;  // per Gaussian: the keyframe number that seeded it
+  std::vector<uint16_t> seen_through, seen_on;  // per Gaussian: free-space evidence (ghosts)
   std::string rng;        // the window sampler, as std::mt19937's operator<< writes it
 };
 
@@ -133,6 +134,11 @@ class Mapper {
                 int iterations, bool densify = false);
   // An input frame as refine() takes it: at refine_resolution_factor.
   splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
+  // Counts a view's evidence for each Gaussian being a ghost (MapperConfig::ghost_views): its
+  // centre seen through, or on the measured surface; ignored pixels tell nothing. Keyframes
+  // count themselves; the final sweep has every frame (as refinement_frame() made it) counted
+  // before it starts.
+  void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
   // Removes transparent, oversized and ghost Gaussians; returns how many.
   std::size_t prune();
   // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
@@ -187,10 +193,9 @@ class Mapper {
   std::size_t added_ = 0;
   std::vector<uint32_t> anchors_;  // per Gaussian, aligned with map_
   // Per Gaussian, aligned with map_: views that saw through its centre, and views whose surface
-  // it lies on (not kept in checkpoints: they start over on a restored run).
+  // it lies on.
   std::vector<uint16_t> seen_through_, seen_on_;
-  // Counts a view's evidence for each Gaussian (ignored pixels tell nothing).
-  void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
+
   std::mt19937 rng_;
 };
 
