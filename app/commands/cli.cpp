@@ -218,7 +218,8 @@ int run_cli(int argc, char** argv) {
   auto* speed = live_cmd->add_option("--speed", live.speed, "Replay rate relative to the recording")
                     ->check(kPositiveFinite)->capture_default_str();
   live_cmd->add_flag_callback("--every-frame", [&live] { live.speed = kEveryFrame; },
-                              "Replay every frame, each once the previous one is tracked (none dropped, no clock)")
+                              "Replay every frame, each once the previous one is tracked (none dropped, no clock); with --watch, "
+                              "take every frame written, none dropped")
       ->excludes(speed);
   live_cmd->add_flag_callback("--no-catch-up", [&live] { live.catch_up = false; },
                               "At the end, write the outputs at once instead of first mapping the keyframes mapping skipped");

@@ -94,7 +94,9 @@ int run_live(const LiveOptions& o) {
   // What the run read, as reconstruct records it, so that eval and render take a live run folder.
   nlohmann::json input;
   if (dataset) input = run_input_json(o.source, *dataset, o.dataset_options.max_frames, 0, config);
-  std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, o.watch_options)
+  WatchOptions watch_options = o.watch_options;
+  watch_options.every_frame = o.speed == kEveryFrame;
+  std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, watch_options)
                                                 : make_replay_source(std::move(*dataset), o.speed);
   std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
   RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer, o.overwrite);

@@ -236,6 +236,7 @@ class WatchSource final : public ThreadedSource {
         }
         dataset_.entries = {entry};
         mailbox_.put({dataset_.load(0), Clock::now(), std::nullopt});
+        if (options_.every_frame && !mailbox_.wait_until_taken(stop_)) return;
         last_new = Clock::now();
       }
       if (names.empty()) {

@@ -46,6 +46,7 @@ struct WatchOptions {
   std::string intrinsics;     // "fx,fy,cx,cy"; empty: DIR/intrinsics.txt ("fx fy cx cy")
   double depth_scale = 5000;  // stored value per metre
   double idle_timeout = 10;   // seconds without a new frame before the stream counts as ended
+  bool every_frame = false;   // each frame waits until the previous one is taken: none dropped
 };
 
 // Watches DIR/rgb/NAME.png + DIR/depth/NAME.png pairs appear (written atomically by the driver:
