@@ -25,6 +25,7 @@ fi
 # and the tools: those parts are built natively on the device).
 target_packages=libc6-dev,libstdc++-12-dev,libeigen3-dev,libglm-dev,libpng-dev,libjpeg-dev,libopenexr-dev
 target_packages+=,libtinygltf-dev,nlohmann-json3-dev,libcli11-dev,libgtest-dev,libstb-dev,libopencv-dev,libceres-dev
+target_packages+=,libzstd-dev,liblz4-dev
 sysroot=${GSLAM_ARM64_SYSROOT:-$HOME/.cache/gslam/sysroot-arm64}
 stamp="$sysroot/.gslam-packages"
 if ! [ -f "$stamp" ] || [ "$(cat "$stamp")" != "$target_packages" ]; then
