@@ -194,7 +194,8 @@ void read_field(const Field& f, const nlohmann::json& v) {
 
 void read_section(const nlohmann::json& object, const std::string& section, const std::vector<Field>& table) {
   for (const auto& [key, value] : object.items()) {
-    const bool is_section = std::any_of(table.begin(), table.end(), [&](const Field& f) { return f.section == key; });
+    const std::string& name = key;  // a structured binding: clang 14 does not capture it
+    const bool is_section = std::any_of(table.begin(), table.end(), [&](const Field& f) { return f.section == name; });
     if (section.empty() && is_section) {
       if (!value.is_object()) type_error(key, "an object of settings", value);
       read_section(value, key, table);
