@@ -152,22 +152,21 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                    config_.moving.prior_grow_px)
           : std::vector<uint8_t>{};
   last_prepared_ = prepare(frame, prior);
-  prior_used_ = !prior.empty();
   const bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
   moving_.clear();
-  if (detect && tracked) leave_out_moving(frame, keyframe_pose, record);
+  if (detect && tracked) leave_out_moving(frame, keyframe_pose, !prior.empty(), record);
 }
 
 void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
                                     const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
-                                    FrameRecord& record) {
+                                    bool prior_used, FrameRecord& record) {
   const auto reference = std::find_if(references_.begin(), references_.end(),
                                       [&](const Reference& r) { return r.keyframe == record.reference; });
   if (reference == references_.end()) return;
   const Eigen::Isometry3d T_world_reference = keyframe_pose(reference->keyframe);
   const Eigen::Isometry3d T_cur_ref = record.T_world_cam.inverse() * T_world_reference;
   // Found on the frame as prepared without any regions left out: the prior's pixels are judged too.
-  const std::shared_ptr<const tracking::OdometryFrame> whole = prior_used_ ? prepare(frame, {}) : last_prepared_;
+  const std::shared_ptr<const tracking::OdometryFrame> whole = prior_used ? prepare(frame, {}) : last_prepared_;
   std::vector<uint8_t> labels =
       tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
   const auto moving = static_cast<std::size_t>(

@@ -120,9 +120,10 @@ class FrameTracker {
   // against the older references; false if none converged (record: the first attempt).
   bool align_with_recovery(const Eigen::Isometry3d& guess,
                            const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose, FrameRecord& record);
-  // Finds the moving regions of a tracked frame and aligns it again without them.
+  // Finds the moving regions of a tracked frame and aligns it again without them; `prior_used`:
+  // last_prepared_ left out the previous frame's regions.
   void leave_out_moving(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
-                        FrameRecord& record);
+                        bool prior_used, FrameRecord& record);
   // The frame prepared for odometry with `labels` (at moving_factor()) ignored.
   std::shared_ptr<const tracking::OdometryFrame> prepare(const splat::RgbdFrame& frame,
                                                          const std::vector<uint8_t>& labels) const;
@@ -143,7 +144,6 @@ class FrameTracker {
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
   std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
   int moving_factor_ = 1;
-  bool prior_used_ = false;  // last_prepared_ left out the previous frame's regions
 };
 
 }  // namespace app
