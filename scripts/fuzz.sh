@@ -12,7 +12,7 @@ data=../shared/data
 mkdir -p "$build"
 CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGSLAM_BUILD_FUZZERS=ON \
   -DGSLAM_SANITIZE=address,undefined -DGSLAM_ENABLE_VULKAN=OFF -DGSLAM_BUILD_TESTS=ON \
-  -DGSLAM_BUILD_BENCHMARKS=OFF > "$build/configure.log"
+  -DGSLAM_BUILD_BENCHMARKS=OFF -DGSLAM_ENABLE_ROS1_NODE=OFF > "$build/configure.log"
 targets=(ply gltf image trajectory dataset config safetensors checkpoint mcap)
 cmake --build "$build" --target "${targets[@]/#/fuzz_}"
 

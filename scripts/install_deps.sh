@@ -3,7 +3,9 @@
 # and munge serve the --slurm tests, which start their own daemons; this script starts no service.
 # The ROS 1 packages (Debian's Noetic-era rosbag, sensor_msgs; rosbag/bag.h needs the include
 # folders of pluginlib, class_loader, rcpputils, rcutils, ament_index_cpp) let gslam read .bag
-# files and the tests write them; gslam builds without them. zstd and lz4 decompress MCAP chunks.
+# files and the tests write them; with roscpp and tf2_ros gslam_ros (the node) is
+# built, and ros-core's roscore, rosbag play, rostopic and rosservice test it. gslam builds
+# without any of them. zstd and lz4 decompress MCAP chunks.
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
@@ -17,6 +19,8 @@ packages=(
   libzstd-dev liblz4-dev lz4
   librosbag-dev libroscpp-dev libsensor-msgs-dev libtf2-msgs-dev libroslz4-dev
   pluginlib-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
+  libtf2-ros-dev libnav-msgs-dev libstd-srvs-dev
+  ros-core python3-tf2-msgs python3-std-srvs
 )
 missing=()
 for p in "${packages[@]}"; do

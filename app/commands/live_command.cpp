@@ -70,13 +70,14 @@ struct Shared {
 
 }  // namespace
 
-int run_live(const LiveOptions& o) {
+int run_live(const LiveOptions& o) { return run_live(o, load_slam_config(o.config), nullptr); }
+
+int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
   if (!(o.checkpoint_seconds > 0)) throw splat::Error("--checkpoint-seconds must be > 0");
-  const SlamConfig config = load_slam_config(o.config);
   // The dataset is opened (and checked) first; the replay clock starts once everything else is
   // ready, so start-up time does not count as dropped frames.
   std::optional<Dataset> dataset;
-  if (!o.watch) dataset = open_dataset(o.source, o.dataset_options);
+  if (!o.watch && !host) dataset = open_dataset(o.source, o.dataset_options);
   std::string note;
   auto tracking_rasterizer = make_rasterizer(o.backend, note);
   std::fprintf(stderr, "%s\n", note.c_str());
@@ -88,19 +89,21 @@ int run_live(const LiveOptions& o) {
   }
   auto mapping_rasterizer = make_rasterizer(mapping_backend, note);
   std::unique_ptr<ViewerWindow> window;
-  if (!o.headless) window = std::make_unique<ViewerWindow>("gslam live");
+  if (!o.headless && !host) window = std::make_unique<ViewerWindow>("gslam live");
   auto view_rasterizer = splat::make_cpu_rasterizer({1});
-  SlamSystem live(*tracking_rasterizer, *mapping_rasterizer, config);
+  auto make_system = [&] { return std::make_unique<SlamSystem>(*tracking_rasterizer, *mapping_rasterizer, config); };
+  std::unique_ptr<SlamSystem> live = make_system();
   // What the run read, as reconstruct records it, so that eval and render take a live run folder.
   nlohmann::json input;
   if (dataset) input = run_input_json(o.source, *dataset, o.dataset_options.max_frames, 0, config);
   WatchOptions watch_options = o.watch_options;
   watch_options.every_frame = o.speed == kEveryFrame;
-  std::unique_ptr<FrameSource> source = o.watch ? make_watch_source(o.source, watch_options)
-                                                : make_replay_source(std::move(*dataset), o.speed);
+  std::unique_ptr<FrameSource> source = host      ? host->open_source()
+                                       : o.watch ? make_watch_source(o.source, watch_options)
+                                                 : make_replay_source(std::move(*dataset), o.speed);
   std::fprintf(stderr, "live: %s%s\n", source->describe().c_str(), o.headless ? ", headless" : "");
-  RunOutputs outputs(o.out, source->describe(), *tracking_rasterizer, o.overwrite);
-  if (!input.is_null()) outputs.extra()["input"] = input;
+  auto outputs = std::make_unique<RunOutputs>(o.out, source->describe(), *tracking_rasterizer, o.overwrite);
+  if (!input.is_null()) outputs->extra()["input"] = input;
   Shared shared;
   LatencyWindow latency;
   std::vector<StampedPose> truth;
@@ -113,16 +116,36 @@ int run_live(const LiveOptions& o) {
 
   // Outputs with the poses as mapping has corrected them so far.
   auto checkpoint = [&] {
-    const std::shared_ptr<const splat::Gaussians> map = live.map();
+    const std::shared_ptr<const splat::Gaussians> map = live->map();
     if (!map) return;  // no frame yet
-    outputs.update_poses(live.trajectory());
-    outputs.set_mapping(live.mapping_totals(), live.loop_events());
-    outputs.checkpoint(*map, live.keyframes(), true);
+    outputs->update_poses(live->trajectory());
+    outputs->set_mapping(live->mapping_totals(), live->loop_events());
+    outputs->checkpoint(*map, live->keyframes(), true);
+  };
+  // A host's request between frames: the run folder written now, or the map forgotten.
+  auto serve = [&](const LiveRequest& request) {
+    if (request.kind == LiveRequest::kSave) {
+      if (outputs->records().empty()) return request.answer(false, "nothing to save: no frame tracked yet");
+      checkpoint();
+      return request.answer(true, "wrote trajectory.txt, map.ply and summary.json in " + o.out.string());
+    }
+    live.reset();  // its mapping thread stops before the next one starts
+    live = make_system();
+    outputs = std::make_unique<RunOutputs>(o.out, source->describe(), *tracking_rasterizer, true);
+    truth.clear();
+    {
+      std::lock_guard lock(shared.mutex);
+      shared.view = LiveViewState();
+    }
+    request.answer(true, "map and trajectory cleared; the next frame starts a new map");
   };
   auto pipeline = [&] {
     Progress progress("live", 0, "frames");
     Clock::time_point last_checkpoint = Clock::now();
     while (!shared.stop && !InterruptGuard::interrupted()) {
+      if (host) {
+        while (std::optional<LiveRequest> request = host->next_request()) serve(*request);
+      }
       std::optional<ArrivedFrame> arrived = source->next(std::chrono::milliseconds(100));
       if (!arrived) {
         if (source->finished()) break;
@@ -139,27 +162,28 @@ int run_live(const LiveOptions& o) {
         ++paused_dropped;
         continue;
       }
-      const FrameRecord record = live.process(arrived->frame);
+      const FrameRecord record = live->process(arrived->frame);
       const double ms =
           std::chrono::duration<double, std::milli>(Clock::now() - arrived->arrived).count();
       latency.add(ms);
       if (!record.tracked)
         std::fprintf(stderr, "\nframe at %.3f s: tracking failed (%s)\n", record.timestamp,
                      record.reason.c_str());
-      outputs.add(record, 0);
+      outputs->add(record, 0);
+      if (host) host->tracked(arrived->frame, record, *live);
       if (arrived->T_world_cam_truth)
         truth.push_back({record.timestamp, *arrived->T_world_cam_truth});
-      const std::size_t n = outputs.records().size();
+      const std::size_t n = outputs->records().size();
       char stats[256];
       std::snprintf(stats, sizeof(stats),
                     "gslam live: %zu frames, %.1f frames/s, latency p95 %.0f ms, %zu Gaussians, "
                     "%zu dropped%s",
-                    n, static_cast<double>(n) / std::max(1e-9, outputs.elapsed_seconds()),
+                    n, static_cast<double>(n) / std::max(1e-9, outputs->elapsed_seconds()),
                     latency.percentile(0.95), record.gaussians, dropped(),
                     window && shared.paused ? ", paused" : "");
       {
         std::lock_guard lock(shared.mutex);
-        shared.view.map = live.map();
+        shared.view.map = live->map();
         shared.view.trajectory.push_back(record.T_world_cam.translation());
         shared.view.T_world_cam = record.T_world_cam;
         if (window) shared.view.input = to_image8(arrived->frame);
@@ -185,22 +209,22 @@ int run_live(const LiveOptions& o) {
     if (InterruptGuard::interrupted()) {
       std::fprintf(stderr, "interrupted: writing what was done (no keyframe renders; gslam render RUN draws views)\n");
     }
-    const std::size_t backlog = live.mapping_backlog();
+    const std::size_t backlog = live->mapping_backlog();
     if (backlog > 0 && o.catch_up && !InterruptGuard::interrupted()) {
       Progress progress("catch-up", backlog, "skipped keyframes mapped");
-      live.catch_up_mapping(
+      live->catch_up_mapping(
           [&](std::size_t done, std::size_t total) {
             progress.update(done);
             std::lock_guard lock(shared.mutex);
-            shared.view.map = live.map();
+            shared.view.map = live->map();
             shared.stats = "gslam live: mapping skipped keyframes, " + std::to_string(done) + " of " + std::to_string(total);
           },
           [] { return InterruptGuard::interrupted(); });
       progress.finish();
     }
-    live.finish();
+    live->finish();
     std::lock_guard lock(shared.mutex);
-    shared.view.map = live.map();
+    shared.view.map = live->map();
     shared.finished = true;
   };
 
@@ -268,14 +292,16 @@ int run_live(const LiveOptions& o) {
   interrupt.reset();
   if (error) std::rethrow_exception(error);
 
-  const MappingTotals mapping = live.mapping_totals();
-  outputs.update_poses(live.trajectory());
-  outputs.set_mapping(mapping, live.loop_events());
-  if (input.is_null()) {  // a watched folder: its camera is known once frames came
-    outputs.extra()["input"] = run_input_json(o.source, "watched", source->intrinsics(), o.watch_options.depth_scale,
-                                              o.dataset_options.max_frames, 0, config);
+  const MappingTotals mapping = live->mapping_totals();
+  outputs->update_poses(live->trajectory());
+  outputs->set_mapping(mapping, live->loop_events());
+  if (host) {  // a host's camera, or a watched folder's, is known once frames came
+    outputs->extra()["input"] = host->input_json(source->intrinsics(), config);
+  } else if (input.is_null()) {
+    outputs->extra()["input"] = run_input_json(o.source, "watched", source->intrinsics(), o.watch_options.depth_scale,
+                                               o.dataset_options.max_frames, 0, config);
   }
-  outputs.extra()["live"] = {{"source", source->describe()},
+  outputs->extra()["live"] = {{"source", source->describe()},
                              {"frames_received", source->delivered() + source->dropped()},
                              {"frames_dropped", dropped()},
                              {"frames_dropped_while_paused", paused_dropped},
@@ -284,18 +310,18 @@ int run_live(const LiveOptions& o) {
                              {"keyframes_caught_up", mapping.keyframes_caught_up},
                              {"keyframes_skipped", mapping.keyframes_skipped},
                              {"interrupted", interrupted}};
-  outputs.set_stopping(interrupted);
-  const std::shared_ptr<const splat::Gaussians> map = live.map();
-  if (!o.watch && !interrupted && map) {  // the map's classes, from the recording's label images if it has them
-    fuse_run_labels(open_dataset(o.source, o.dataset_options), live.trajectory(), *map, *mapping_rasterizer,
-                    config.mapping.refine_resolution_factor, outputs);
+  outputs->set_stopping(interrupted);
+  const std::shared_ptr<const splat::Gaussians> map = live->map();
+  if (!o.watch && !host && !interrupted && map) {  // the map's classes, from the recording's label images if it has them
+    fuse_run_labels(open_dataset(o.source, o.dataset_options), live->trajectory(), *map, *mapping_rasterizer,
+                    config.mapping.refine_resolution_factor, *outputs);
   }
   const splat::Gaussians empty;
-  outputs.finish(map ? *map : empty, live.keyframes(), *tracking_rasterizer, source->intrinsics(), truth);
+  outputs->finish(map ? *map : empty, live->keyframes(), *tracking_rasterizer, source->intrinsics(), truth);
   std::printf(
       "live: tracked %zu frames, dropped %zu, latency p95 %.0f ms, %zu keyframes mapped (%zu caught up at the end, "
       "%zu skipped), %zu Gaussians -> %s\n",
-      outputs.records().size(), dropped(), latency.percentile(0.95), mapping.keyframes_mapped,
+      outputs->records().size(), dropped(), latency.percentile(0.95), mapping.keyframes_mapped,
       mapping.keyframes_caught_up, mapping.keyframes_skipped, map ? map->size() : std::size_t(0), o.out.c_str());
   return 0;
 }

@@ -1,10 +1,17 @@
 #pragma once
 #include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "commands/backend.h"
 #include "datasets/dataset.h"
 #include "datasets/frame_source.h"
+#include "slam/slam_config.h"
+#include "slam/slam_system.h"
 
 namespace app {
 
@@ -34,5 +41,29 @@ struct LiveOptions {
 // dropped (never tracked: replaced by a newer frame while tracking was busy, or arriving while
 // paused), tracking latency percentiles, keyframes mapped, caught up and skipped.
 int run_live(const LiveOptions& options);
+
+// What a host asks of a live run between two frames: the run folder written now (as the
+// viewer's snapshot key), or the map and trajectory forgotten so that the next frame starts anew.
+struct LiveRequest {
+  enum Kind { kSave, kReset } kind;
+  std::function<void(bool ok, const std::string& message)> answer;  // called once it is done
+};
+
+// A program that runs `gslam live` around frames of its own (the ROS node): the run takes its
+// frames from open_source(), hands each tracked frame back, and serves its requests between
+// frames. No window; the source and the options' `out` say the rest.
+class LiveHost {
+ public:
+  virtual ~LiveHost() = default;
+  virtual std::unique_ptr<FrameSource> open_source() = 0;
+  // summary.json "input" (what eval and render read), written once the camera is known.
+  virtual nlohmann::json input_json(const splat::Camera& intrinsics, const SlamConfig& config) const = 0;
+  // After each frame, on the run's thread (the next frame waits for it).
+  virtual void tracked(const splat::RgbdFrame& frame, const FrameRecord& record, const SlamSystem& system) = 0;
+  virtual std::optional<LiveRequest> next_request() = 0;
+};
+
+// run_live with `config` instead of options.config, and frames from `host` when it is given.
+int run_live(const LiveOptions& options, const SlamConfig& config, LiveHost* host);
 
 }  // namespace app

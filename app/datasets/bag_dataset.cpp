@@ -37,26 +37,8 @@ class BagFrameStore final : public FrameStore {
                         double depth_scale) const override {
     const auto [c, d] = pairs_.at(i);
     const std::string colour_where = where(colour_, c), depth_where = where(depth_, d);
-    const splat::Image8 rgb = decode_colour(reader_->read_image(colour_, c), colour_where);
-    if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
-      throw splat::Error(colour_where + ": image is " + std::to_string(rgb.width) + "x" +
-                         std::to_string(rgb.height) + ", expected " +
-                         std::to_string(intrinsics.width) + "x" +
-                         std::to_string(intrinsics.height));
-    }
-    const RosImage depth = reader_->read_image(depth_, d);
-    if (depth.width != std::uint32_t(rgb.width) || depth.height != std::uint32_t(rgb.height)) {
-      throw splat::Error(depth_where + ": depth is " + std::to_string(depth.width) + "x" +
-                         std::to_string(depth.height) + ", colour is " + std::to_string(rgb.width) +
-                         "x" + std::to_string(rgb.height));
-    }
-    splat::RgbdFrame f;
-    f.camera = intrinsics;
-    f.rgb.resize(rgb.data.size());
-    for (std::size_t k = 0; k < rgb.data.size(); ++k)
-      f.rgb[k] = static_cast<float>(rgb.data[k]) / 255.f;
-    f.depth = decode_depth(depth, depth_scale, depth_where);
-    return f;
+    return rgbd_frame_from_ros(reader_->read_image(colour_, c), reader_->read_image(depth_, d), intrinsics,
+                               depth_scale, colour_where, depth_where);
   }
 
  private:

@@ -41,21 +41,6 @@ std::vector<ListEntry> read_list(const std::filesystem::path& path) {
   return out;
 }
 
-void apply_intrinsics(splat::Camera& cam, const std::string& text) {
-  std::stringstream ss(text);
-  std::vector<double> v;
-  for (std::string item; std::getline(ss, item, ',');) {
-    char* end = nullptr;
-    v.push_back(std::strtod(item.c_str(), &end));
-    if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.clear(), v.push_back(-1);
-  }
-  if (v.size() != 4 || v[0] <= 0 || v[1] <= 0) throw splat::Error("intrinsics '" + text + "': expected fx,fy,cx,cy");
-  cam.fx = v[0];
-  cam.fy = v[1];
-  cam.cx = v[2];
-  cam.cy = v[3];
-}
-
 // Image size from the first colour image.
 void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
   const splat::Image8 image = read_rgb8(rgb);
@@ -428,6 +413,21 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
     }
   }
   return f;
+}
+
+void apply_intrinsics(splat::Camera& cam, const std::string& text) {
+  std::stringstream ss(text);
+  std::vector<double> v;
+  for (std::string item; std::getline(ss, item, ',');) {
+    char* end = nullptr;
+    v.push_back(std::strtod(item.c_str(), &end));
+    if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.clear(), v.push_back(-1);
+  }
+  if (v.size() != 4 || v[0] <= 0 || v[1] <= 0) throw splat::Error("intrinsics '" + text + "': expected fx,fy,cx,cy");
+  cam.fx = v[0];
+  cam.fy = v[1];
+  cam.cx = v[2];
+  cam.cy = v[3];
 }
 
 splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb) {

@@ -77,6 +77,8 @@ struct Dataset {
   bool has_ground_truth() const;
 };
 
+// Sets the camera's fx, fy, cx, cy from "fx,fy,cx,cy"; throws splat::Error naming the text.
+void apply_intrinsics(splat::Camera& camera, const std::string& intrinsics);
 // Intrinsics "fx,fy,cx,cy" with the image size of the colour image `rgb`. Throws splat::Error
 // naming the text or the file.
 splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb);

@@ -145,4 +145,25 @@ std::vector<float> decode_depth(const RosImage& image, double depth_scale,
   return out;
 }
 
+splat::RgbdFrame rgbd_frame_from_ros(const RosImage& colour, const RosImage& depth, const splat::Camera& intrinsics,
+                                     double depth_scale, const std::string& colour_where,
+                                     const std::string& depth_where) {
+  const splat::Image8 rgb = decode_colour(colour, colour_where);
+  if (rgb.width != intrinsics.width || rgb.height != intrinsics.height) {
+    throw splat::Error(colour_where + ": image is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height) +
+                       ", expected " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height));
+  }
+  if (depth.width != std::uint32_t(rgb.width) || depth.height != std::uint32_t(rgb.height)) {
+    throw splat::Error(depth_where + ": depth is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                       ", colour is " + std::to_string(rgb.width) + "x" + std::to_string(rgb.height));
+  }
+  splat::RgbdFrame f;
+  f.timestamp = colour.stamp;
+  f.camera = intrinsics;
+  f.rgb.resize(rgb.data.size());
+  for (std::size_t k = 0; k < rgb.data.size(); ++k) f.rgb[k] = static_cast<float>(rgb.data[k]) / 255.f;
+  f.depth = decode_depth(depth, depth_scale, depth_where);
+  return f;
+}
+
 }  // namespace app

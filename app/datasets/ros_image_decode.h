@@ -5,6 +5,7 @@
 
 #include "datasets/bag_reader.h"
 #include "splat/image.h"
+#include "splat/rgbd_frame.h"
 
 namespace app {
 
@@ -25,5 +26,12 @@ splat::Image8 decode_colour(const RosImage& image, const std::string& where);
 // Throws splat::Error starting with `where` as decode_colour does.
 std::vector<float> decode_depth(const RosImage& image, double depth_scale,
                                 const std::string& where);
+
+// The frame a colour and a depth message make, for the camera `intrinsics` (whose size both
+// must have). Throws splat::Error starting with `colour_where` or `depth_where` as above, or
+// for a size that differs from the camera's or the other image's.
+splat::RgbdFrame rgbd_frame_from_ros(const RosImage& colour, const RosImage& depth, const splat::Camera& intrinsics,
+                                     double depth_scale, const std::string& colour_where,
+                                     const std::string& depth_where);
 
 }  // namespace app

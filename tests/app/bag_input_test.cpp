@@ -23,6 +23,7 @@
 #include "support/expect_error.h"
 #include "support/run_command.h"
 #include "support/temp_dir.h"
+#include "support/teddy_recording.h"
 #include "support/test_data.h"
 #ifdef GSLAM_HAVE_ROS1
 #include "support/ros1_bag_writer.h"
@@ -31,9 +32,15 @@
 namespace {
 
 using gslam::test::TempDir;
+using gslam::test::colour_bytes;
+using gslam::test::float_bytes;
+using gslam::test::kMountQ;
+using gslam::test::kMountT;
+using gslam::test::kTeddyK;
+using gslam::test::mocap;
+using gslam::test::ros_time;
+using gslam::test::Transform;
 constexpr char kTeddy[] = "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy";
-// The TUM fr3 Kinect's calibrated colour camera (as the folder's freiburg3 preset).
-constexpr std::array<double, 9> kTeddyK = {535.4, 0, 320.1, 0, 539.2, 247.6, 0, 0, 1};
 // Frames in the recordings: enough for the trajectory comparison, few for the test time.
 constexpr int kFrames = 20;
 // Bag and folder runs read the same floats, so their trajectories agree to rounding; the issue's
@@ -65,48 +72,7 @@ std::string mcap_writer_missing() {
   return "";
 }
 
-// "1311867170.462290" -> {1311867170, 462290000}: a TUM stamp as a ROS time, exactly.
-std::array<std::uint32_t, 2> ros_time(const std::string& stem) {
-  const auto dot = stem.find('.');
-  std::string frac = dot == std::string::npos ? "" : stem.substr(dot + 1);
-  frac.resize(9, '0');
-  return {static_cast<std::uint32_t>(std::stoul(stem.substr(0, dot))),
-          static_cast<std::uint32_t>(std::stoul(frac))};
-}
 
-std::array<std::uint32_t, 2> ros_time(const std::filesystem::path& file) {
-  return ros_time(file.stem().string());
-}
-
-// Motion capture as TUM's bags publish it: groundtruth.txt's poses of /kinect in /world within
-// the first `frames` frames' time span (on /tf), and a fixed mount /kinect -> /rgb_optical (on
-// /tf_static) that the ground truth must chain through.
-struct Transform {
-  std::array<std::uint32_t, 2> stamp;
-  std::array<double, 3> t;
-  std::array<double, 4> q;
-};
-constexpr std::array<double, 3> kMountT = {0.01, -0.02, 0.03};
-constexpr std::array<double, 4> kMountQ = {0, 0, 0.7071067811865476,
-                                           0.7071067811865476};  // 90 degrees about z
-
-std::vector<Transform> mocap(const app::Dataset& folder, int frames) {
-  std::ifstream in(gslam::test::shared_data(kTeddy) / "groundtruth.txt");
-  const double first = folder.entries.front().timestamp - 0.1,
-               last = folder.entries[std::size_t(frames - 1)].timestamp + 0.1;
-  std::vector<Transform> out;
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream words(line);
-    std::string stamp;
-    Transform tf;
-    words >> stamp >> tf.t[0] >> tf.t[1] >> tf.t[2] >> tf.q[0] >> tf.q[1] >> tf.q[2] >> tf.q[3];
-    if (std::stod(stamp) < first || std::stod(stamp) > last) continue;
-    tf.stamp = ros_time(stamp);
-    out.push_back(tf);
-  }
-  return out;
-}
 
 // With --gt-frames world,rgb_optical: the folder's ground truth (groundtruth.txt) times the mount.
 void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::path& recording,
@@ -136,21 +102,6 @@ void expect_tf_ground_truth(const app::Dataset& folder, const std::filesystem::p
                      "world -> kinect", "kinect -> rgb_optical");
 }
 
-std::vector<std::uint8_t> colour_bytes(const splat::RgbdFrame& f, bool bgr) {
-  std::vector<std::uint8_t> out(f.rgb.size());
-  for (std::size_t k = 0; k < f.rgb.size(); ++k) {
-    const std::size_t c = k % 3, px = k - c;
-    out[k] = static_cast<std::uint8_t>(std::lround(f.rgb[px + (bgr ? 2 - c : c)] * 255.f));
-  }
-  return out;
-}
-
-// Depth as 32FC1 metres: the folder's own floats.
-std::vector<std::uint8_t> float_bytes(const std::vector<float>& v) {
-  std::vector<std::uint8_t> out(v.size() * 4);
-  std::memcpy(out.data(), v.data(), out.size());
-  return out;
-}
 
 // Depth as 16UC1: the PNG's stored values.
 std::vector<std::uint8_t> png_bytes(const std::filesystem::path& png) {
@@ -210,7 +161,7 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
          << R"(], "q": [)" << q[0] << "," << q[1] << "," << q[2] << "," << q[3] << "]}";
     };
     tf << R"(, "tf": [)";
-    const std::vector<Transform> poses = mocap(folder, spec.frames);
+    const std::vector<Transform> poses = mocap(folder, 0, spec.frames);
     for (std::size_t i = 0; i < poses.size(); ++i) {
       if (i) tf << ",";
       json(poses[i].stamp, "/world", "/kinect", poses[i].t, poses[i].q);
@@ -486,28 +437,6 @@ TEST(McapReader, CraftedSizesAreRefused) {
                      "absent.mcap: recording does not exist");
 }
 
-#ifdef GSLAM_HAVE_ROS1
-// The first `frames` teddy frames as TUM's own bags hold them: rgb8 colour, 32FC1 depth in metres.
-void write_teddy_bag(const app::Dataset& folder, int frames, const std::filesystem::path& out) {
-  gslam::test::Ros1BagWriter bag(out.string());
-  for (int i = 0; i < frames; ++i) {
-    const app::DatasetEntry& e = folder.entries[std::size_t(i)];
-    const splat::RgbdFrame f = folder.load(std::size_t(i));
-    const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
-    if (i == 0) bag.camera_info("/camera/rgb/camera_info", ct[0], ct[1], 640, 480, kTeddyK);
-    bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3,
-              colour_bytes(f, false));
-    bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4,
-              float_bytes(f.depth));
-  }
-  for (const Transform& tf : mocap(folder, frames))
-    bag.transform("/tf", tf.stamp[0], tf.stamp[1], "/world", "/kinect", tf.t, tf.q);
-  const auto t0 = ros_time(folder.entries.front().rgb);
-  bag.transform("/tf_static", t0[0], t0[1], "kinect", "rgb_optical", kMountT, kMountQ);
-  bag.close();
-}
-#endif
-
 class Ros1BagInput : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -524,7 +453,7 @@ TEST_F(Ros1BagInput, RosbagFileGivesTheFolderFramesAndTrajectory) {
 #ifdef GSLAM_HAVE_ROS1
   TempDir dir;
   const app::Dataset folder = open_teddy(kFrames);
-  write_teddy_bag(folder, kFrames, dir / "teddy.bag");
+  gslam::test::write_teddy_bag(folder, 0, kFrames, dir / "teddy.bag");
   std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt",
                              dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(dir / "teddy.bag");
@@ -577,7 +506,7 @@ TEST_F(Ros1BagInput, TopicsFoundByTypeOrNamed) {
 TEST_F(Ros1BagInput, TruncatedOrUnindexedBagIsOneLineError) {
 #ifdef GSLAM_HAVE_ROS1
   TempDir dir;
-  write_teddy_bag(open_teddy(2), 2, dir / "good.bag");
+  gslam::test::write_teddy_bag(open_teddy(2), 0, 2, dir / "good.bag");
   const std::string bytes = gslam::test::read_text(dir / "good.bag");
   gslam::test::write_text(dir / "cut.bag", bytes.substr(0, bytes.size() / 2));
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "cut.bag"), (dir / "cut.bag").string() + ": ",

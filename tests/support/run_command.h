@@ -20,6 +20,9 @@ struct InterruptedRun : RunResult {
 };
 InterruptedRun run_and_interrupt(const std::string& command, const std::string& event, double timeout_s = 900);
 
+// A TCP port on the loopback nobody listens on now (the kernel's pick); 0 if none.
+int free_loopback_port();
+
 // Whether a program is on PATH.
 bool program_available(const std::string& name);
 

@@ -1,8 +1,6 @@
 #include "support/slurm_cluster.h"
 
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -25,22 +23,6 @@ constexpr std::chrono::seconds kDrainTimeout{60};
 constexpr std::chrono::seconds kExitTimeout{30};
 // Polling interval for the events above: short beside them.
 constexpr std::chrono::milliseconds kPoll{100};
-
-// A TCP port on the loopback nobody listens on now (the kernel's pick).
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof address;
-  int port = 0;
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0) {
-    port = ntohs(address.sin_port);
-  }
-  ::close(fd);
-  return port;
-}
 
 // Whether child `pid` has exited (reaping it).
 bool exited(pid_t pid) { return ::waitpid(pid, nullptr, WNOHANG) != 0; }
@@ -88,7 +70,7 @@ std::string SlurmCluster::start_daemons() {
   }
   ::chmod((d / "munge.key").c_str(), 0400);
   const std::filesystem::path socket = d / "munge.socket";
-  const int controller_port = free_port(), node_port = free_port();
+  const int controller_port = free_loopback_port(), node_port = free_loopback_port();
   if (controller_port == 0 || node_port == 0 || controller_port == node_port)
     return "no free loopback port";
   conf_ = d / "slurm.conf";

@@ -1,0 +1,255 @@
+// gslam_ros, the ROS 1 node, against a real ROS graph: roscore on a free loopback port, the teddy
+// frames played from ROS 1 bags by rosbag play (on simulated time, so that /tf stamps and their
+// arrival compare), the node's /tf read by rostopic echo, and its ~save and ~reset services
+// called with rosservice. Its run folder evaluates against the teddy ground truth. Without ROS
+// the tests skip, unless GSLAM_REQUIRE_ROS_TESTS (CI) makes that a failure.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "app/run_gslam.h"
+#include "datasets/dataset.h"
+#include "io/trajectory.h"
+#include "support/ros_graph.h"
+#include "support/teddy_recording.h"
+#include "support/temp_dir.h"
+#include "support/test_data.h"
+
+namespace {
+
+using gslam::test::RosGraph;
+using gslam::test::TempDir;
+
+constexpr char kTeddy[] = "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy";
+// Frames per bag: two bags, the map reset between them.
+constexpr int kFrames = 40;
+// A hung node is a failure, not a wait forever; a loaded machine gets far more than it needs.
+constexpr std::chrono::seconds kEventTimeout{600};
+
+#ifdef GSLAM_REQUIRE_ROS_TESTS
+#define GSLAM_REQUIRE_TOOL(ok, why) \
+  if (!(ok)) GTEST_FAIL() << "required (GSLAM_REQUIRE_ROS_TESTS): " << (why)
+#else
+#define GSLAM_REQUIRE_TOOL(ok, why) \
+  if (!(ok)) GTEST_SKIP() << (why)
+#endif
+
+#ifdef GSLAM_ROS_BINARY
+const std::string kNode = GSLAM_ROS_BINARY;
+#else
+const std::string kNode;
+#endif
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+// One transform the node published on /tf, as rostopic echo -p wrote it.
+struct PublishedPose {
+  double received = 0, stamp = 0;  // seconds (simulated time)
+  std::string parent, child;
+  Eigen::Isometry3d T_parent_child = Eigen::Isometry3d::Identity();
+};
+
+// The node's transforms (parent "map") in rostopic echo -p's CSV (other lines are skipped).
+std::vector<PublishedPose> published_poses(const std::filesystem::path& csv) {
+  std::ifstream in(csv);
+  std::vector<PublishedPose> out;
+  std::map<std::string, std::size_t> column;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
+    if (!cells.empty() && cells[0] == "%time") {
+      for (std::size_t i = 0; i < cells.size(); ++i) column[cells[i]] = i;
+      continue;
+    }
+    const std::string p = "field.transforms0.";
+    if (column.empty() || cells.size() != column.size()) continue;
+    auto at = [&](const std::string& name) { return cells.at(column.at(name)); };
+    auto number = [&](const std::string& name) { return std::stod(at(p + name)); };
+    PublishedPose pose;
+    pose.received = std::stod(at("%time")) * 1e-9;
+    pose.stamp = number("header.stamp") * 1e-9;
+    pose.parent = at(p + "header.frame_id");
+    pose.child = at(p + "child_frame_id");
+    if (pose.parent != "map") continue;
+    pose.T_parent_child.translation() = Eigen::Vector3d(number("transform.translation.x"), number("transform.translation.y"),
+                                                        number("transform.translation.z"));
+    pose.T_parent_child.linear() = Eigen::Quaterniond(number("transform.rotation.w"), number("transform.rotation.x"),
+                                                      number("transform.rotation.y"), number("transform.rotation.z"))
+                                       .normalized()
+                                       .toRotationMatrix();
+    out.push_back(pose);
+  }
+  return out;
+}
+
+// Waits until the node has published `count` poses (the event the test needs, not a clock).
+std::vector<PublishedPose> wait_for_poses(const std::filesystem::path& csv, std::size_t count) {
+  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
+  std::vector<PublishedPose> poses;
+  while ((poses = published_poses(csv)).size() < count && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  return poses;
+}
+
+double percentile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[std::min(v.size() - 1, static_cast<std::size_t>(q * double(v.size())))];
+}
+
+class RosNode : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    GSLAM_REQUIRE_TOOL(!kNode.empty(), "gslam_ros was not built (scripts/install_deps.sh installs ROS 1)");
+  }
+};
+
+TEST_F(RosNode, PrintConfigTakesParametersByTheConfigsNamesWithoutAMaster) {
+  const auto r = gslam::test::run_command(kNode + " --print-config _keyframe_every:=7 _tracking/color_weight:=0.25");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json printed = nlohmann::json::parse(r.output);
+  EXPECT_EQ(printed.at("keyframe_every").get<int>(), 7);
+  EXPECT_DOUBLE_EQ(printed.at("tracking").at("color_weight").get<double>(), 0.25);
+  // The same JSON is a config file the node (and reconstruct) reads back.
+  TempDir dir;
+  std::ofstream(dir / "config.json") << r.output;
+  const auto again = gslam::test::run_command(kNode + " --print-config _config:=" + (dir / "config.json").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(nlohmann::json::parse(again.output), printed);
+}
+
+TEST_F(RosNode, BadParametersAndNoMasterAreOneLineErrors) {
+  const auto unknown = gslam::test::run_command(kNode + " --print-config _keyframe_evrey:=7");
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_NE(unknown.output.find("~keyframe_evrey: unknown parameter"), std::string::npos) << unknown.output;
+  const auto type = gslam::test::run_command(kNode + " --print-config _queue_size:=many");
+  EXPECT_EQ(type.exit_code, 1);
+  EXPECT_NE(type.output.find("~queue_size: expected an integer, got \"many\""), std::string::npos) << type.output;
+  const auto setting = gslam::test::run_command(kNode + " --print-config _tracking/nonsense:=1");
+  EXPECT_EQ(setting.exit_code, 1);
+  EXPECT_NE(setting.output.find("tracking.nonsense"), std::string::npos) << setting.output;
+  const int port = gslam::test::free_loopback_port();
+  const auto alone = gslam::test::run_command("ROS_MASTER_URI=http://127.0.0.1:" + std::to_string(port) + " " + kNode);
+  EXPECT_EQ(alone.exit_code, 1);
+  EXPECT_NE(alone.output.find("gslam_ros: error: gslam_ros: no ROS master answers at http://127.0.0.1:" +
+                              std::to_string(port)),
+            std::string::npos)
+      << alone.output;
+}
+
+// The build's ROS package folder (BUILD/ros/gslam): roslaunch finds the node there and remaps
+// its topics to the launch file's arguments.
+TEST_F(RosNode, LaunchFileStartsTheBuiltNodeWithItsRemappings) {
+  GSLAM_REQUIRE_TOOL(gslam::test::program_available("roslaunch"), "roslaunch not installed (ros-core)");
+  TempDir dir;
+  const std::filesystem::path package = std::filesystem::path(kNode).parent_path();
+  const auto r = gslam::test::run_command("ROS_PACKAGE_PATH=" + package.parent_path().string() + " ROS_HOME=" +
+                                          dir.path().string() + " roslaunch --args /gslam gslam gslam.launch rviz:=false rgb:=/cam/colour");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(kNode + " rgb/image:=/cam/colour depth/image:=/camera/depth/image"), std::string::npos)
+      << r.output;
+}
+
+// The teddy frames played by rosbag at their own rate: every pair is tracked (a queue long
+// enough that none is dropped, whatever the machine's load), each pose is on /tf stamped with its
+// image, ~save writes a run folder, ~reset starts a new map for the second bag, and after Ctrl-C
+// the run folder holds the second bag's trajectory, which evaluates against the ground truth.
+TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
+  if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+#ifndef GSLAM_HAVE_ROS1
+  GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
+#else
+  app::DatasetOptions options;
+  options.max_frames = 2 * kFrames;
+  const app::Dataset teddy = app::open_dataset(gslam::test::shared_data(kTeddy), options);
+  std::string why_not;
+  const std::unique_ptr<RosGraph> graph = RosGraph::start(why_not);
+  GSLAM_REQUIRE_TOOL(graph, why_not);
+  const std::filesystem::path first = graph->dir() / "first.bag", second = graph->dir() / "second.bag",
+                              run = graph->dir() / "run", tf = graph->dir() / "tf.csv";
+  gslam::test::write_teddy_bag(teddy, 0, kFrames, first);
+  gslam::test::write_teddy_bag(teddy, kFrames, kFrames, second);
+  ASSERT_EQ(graph->run("rosparam set /use_sim_time true").exit_code, 0);
+  graph->spawn({"env", "PYTHONUNBUFFERED=1", "rostopic", "echo", "-p", "/tf", "__name:=tf_echo"}, "tf.csv");
+  const pid_t node = graph->spawn({kNode, "rgb/image:=/camera/rgb/image_color", "depth/image:=/camera/depth/image",
+                                   "rgb/camera_info:=/camera/rgb/camera_info", "_out:=" + run.string(),
+                                   "_queue_size:=1000", "_backend:=cpu"},
+                                  "node.log");
+  // Both subscribe before the first frame is played (rosbag waits for the node itself).
+  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
+  while (graph->run("rostopic info /tf").output.find("/tf_echo") == std::string::npos) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "rostopic echo never subscribed to /tf";
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const std::vector<std::string> play = {"rosbag", "play", "--clock", "--hz=1000", "--wait-for-subscribers", "-q",
+                                         "--topics", "/camera/rgb/image_color", "/camera/depth/image",
+                                         "/camera/rgb/camera_info", "--bags"};
+  auto play_bag = [&](const std::filesystem::path& bag) {
+    std::vector<std::string> args = play;
+    args.push_back(bag.string());
+    return graph->wait(graph->spawn(args, "play.log"));
+  };
+
+  ASSERT_EQ(play_bag(first), 0) << gslam::test::read_text(graph->dir() / "play.log");
+  const std::vector<PublishedPose> first_poses = wait_for_poses(tf, kFrames);
+  ASSERT_EQ(first_poses.size(), std::size_t(kFrames)) << gslam::test::read_text(graph->dir() / "node.log");
+  for (int i = 0; i < kFrames; ++i) {  // each pose carries its colour image's stamp
+    EXPECT_NEAR(first_poses[std::size_t(i)].stamp, teddy.entries[std::size_t(i)].timestamp, 1e-6) << "frame " << i;
+    EXPECT_EQ(first_poses[std::size_t(i)].child, "camera") << "the bag's images have no frame_id";
+  }
+  const auto save = graph->run("rosservice call /gslam/save");
+  EXPECT_NE(save.output.find("success: True"), std::string::npos) << save.output;
+  EXPECT_EQ(app::read_tum_trajectory(run / "trajectory.txt").size(), std::size_t(kFrames));
+  const auto reset = graph->run("rosservice call /gslam/reset");
+  EXPECT_NE(reset.output.find("success: True"), std::string::npos) << reset.output;
+
+  ASSERT_EQ(play_bag(second), 0) << gslam::test::read_text(graph->dir() / "play.log");
+  const std::vector<PublishedPose> poses = wait_for_poses(tf, 2 * kFrames);
+  ASSERT_EQ(poses.size(), std::size_t(2 * kFrames)) << gslam::test::read_text(graph->dir() / "node.log");
+  EXPECT_EQ(graph->interrupt(node), 0) << gslam::test::read_text(graph->dir() / "node.log");
+
+  // The run folder is the second bag's run, complete as `gslam live` writes it.
+  const nlohmann::json summary = read_json(run / "summary.json");
+  EXPECT_EQ(summary.at("input").at("format"), "ros");
+  EXPECT_EQ(summary.at("live").at("frames_dropped").get<int>(), 0);
+  const auto trajectory = app::read_tum_trajectory(run / "trajectory.txt");
+  ASSERT_EQ(trajectory.size(), std::size_t(kFrames));
+  const auto eval = run_gslam("eval " + run.string() + " --dataset " + gslam::test::shared_data(kTeddy).string());
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  const nlohmann::json e = read_json(run / "eval.json");
+  EXPECT_EQ(e.at("ate").at("matched_frames").get<int>(), kFrames);
+  EXPECT_LT(e.at("ate").at("rmse_m").get<double>(), 0.02) << "teddy tracks to a centimetre or better";
+
+  // /tf holds the poses as tracked; trajectory.txt has them as mapping corrected them since. The
+  // map frame is the first camera's, turned from optical (z forward) to body (z up) axes.
+  Eigen::Isometry3d body_from_optical = Eigen::Isometry3d::Identity();
+  body_from_optical.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  std::vector<double> differences, latencies;
+  for (int i = 0; i < kFrames; ++i) {
+    const PublishedPose& p = poses[std::size_t(kFrames + i)];
+    EXPECT_NEAR(p.stamp, trajectory[std::size_t(i)].timestamp, 1e-4);
+    const Eigen::Isometry3d T_world_cam = body_from_optical.inverse() * p.T_parent_child;
+    differences.push_back((T_world_cam.translation() - trajectory[std::size_t(i)].T_world_cam.translation()).norm());
+    latencies.push_back(p.received - p.stamp);
+  }
+  EXPECT_LT(percentile(differences, 0.5), 0.005);
+  EXPECT_TRUE(poses.front().T_parent_child.translation().norm() < 1e-9 &&
+              poses[kFrames].T_parent_child.translation().norm() < 1e-9)
+      << "each map starts at its first camera";
+  RecordProperty("tf_latency_p50_ms", std::to_string(1000 * percentile(latencies, 0.5)));
+  RecordProperty("tf_latency_p95_ms", std::to_string(1000 * percentile(latencies, 0.95)));
+  std::printf("tf latency from the image stamp: p50 %.1f ms, p95 %.1f ms (simulated time; load-dependent)\n",
+              1000 * percentile(latencies, 0.5), 1000 * percentile(latencies, 0.95));
+#endif
+}
+
+}  // namespace
