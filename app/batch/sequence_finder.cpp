@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "datasets/bag_reader.h"
 #include "splat/error.h"
 
 namespace app {
@@ -24,20 +25,25 @@ bool looks_like_sequence(const std::filesystem::path& dir) {
          is("intrinsics.txt") && has_images(dir / "rgb");                             // images
 }
 
+void add(const std::filesystem::path& root, const std::filesystem::path& sequence, std::vector<FoundSequence>& found) {
+  std::string name = std::filesystem::relative(sequence, root).generic_string();
+  if (name == ".") name = std::filesystem::absolute(root).lexically_normal().filename().string();  // the root itself
+  if (name.empty()) name = "sequence";
+  std::replace(name.begin(), name.end(), '/', '_');
+  found.push_back({name, sequence});
+}
+
 void search(const std::filesystem::path& root, const std::filesystem::path& dir, int depth_left,
             std::vector<FoundSequence>& found) {
-  if (looks_like_sequence(dir)) {
-    std::string name = std::filesystem::relative(dir, root).generic_string();
-    if (name == ".") name = std::filesystem::absolute(root).lexically_normal().filename().string();  // the root itself
-    if (name.empty()) name = "sequence";
-    std::replace(name.begin(), name.end(), '/', '_');
-    found.push_back({name, dir});
-    return;
-  }
-  if (depth_left == 0) return;
+  if (looks_like_sequence(dir)) return add(root, dir, found);
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    if (e.is_directory(ec) && !e.is_symlink(ec)) search(root, e.path(), depth_left - 1, found);
+    if (e.is_symlink(ec)) continue;
+    if (e.is_regular_file(ec) && is_bag_file(e.path())) {
+      add(root, e.path(), found);  // a ROS recording ("teddy.bag" is named "teddy.bag")
+    } else if (depth_left > 0 && e.is_directory(ec)) {
+      search(root, e.path(), depth_left - 1, found);
+    }
   }
 }
 

@@ -36,11 +36,18 @@ TEST(SequenceFinder, FindsEveryLayoutAtAnyDepthButNotInsideASequence) {
   write_sequence(dir / "suite" / "c", 3);
   std::filesystem::remove(dir / "suite" / "c" / "rgb.txt");
   std::filesystem::remove(dir / "suite" / "c" / "depth.txt");
+  // ROS recordings are sequences by their name (the reader checks their contents), also beside
+  // other sequences, but not inside one; other files are not.
+  gslam::test::write_text(dir / "suite" / "group" / "run.MCAP", "");
+  gslam::test::write_text(dir / "suite" / "a" / "inside.bag", "");
+  gslam::test::write_text(dir / "suite" / "notes" / "bag.txt", "");
   const auto found = app::find_sequences(dir / "suite");
-  ASSERT_EQ(found.size(), 3u);
+  ASSERT_EQ(found.size(), 4u);
   EXPECT_EQ(found[0].name, "a");
   EXPECT_EQ(found[1].name, "c");
   EXPECT_EQ(found[2].name, "group_b");
+  EXPECT_EQ(found[3].name, "group_run.MCAP");
+  EXPECT_EQ(found[3].path, dir / "suite" / "group" / "run.MCAP");
   EXPECT_EQ(app::find_sequences(dir / "suite" / "group" / "b").front().name, "b") << "the root itself";
   EXPECT_TRUE(app::find_sequences(dir / "suite" / "notes").empty());
 }
