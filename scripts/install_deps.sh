@@ -4,7 +4,8 @@
 # The ROS 1 packages (Debian's Noetic-era rosbag, sensor_msgs; rosbag/bag.h needs the include
 # folders of pluginlib, class_loader, rcpputils, rcutils, ament_index_cpp) let gslam read .bag
 # files and the tests write them; with roscpp and tf2_ros gslam_ros (the node) is
-# built, and ros-core's roscore, rosbag play, rostopic and rosservice test it. gslam builds
+# built, and ros-core's roscore, rosbag play, rostopic and rosservice test it (the Python message
+# packages serve rostopic, rosservice and scripts/ros_node_bench.sh). gslam builds
 # without any of them. zstd and lz4 decompress MCAP chunks.
 set -euo pipefail
 packages=(
@@ -20,7 +21,7 @@ packages=(
   librosbag-dev libroscpp-dev libsensor-msgs-dev libtf2-msgs-dev libroslz4-dev
   pluginlib-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
   libtf2-ros-dev libnav-msgs-dev libstd-srvs-dev
-  ros-core python3-tf2-msgs python3-std-srvs
+  ros-core python3-tf2-msgs python3-std-srvs python3-sensor-msgs python3-pil python3-numpy
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -20,6 +20,8 @@ namespace {
 // roscore starts in a second or two here; a loaded CI machine gets far more.
 constexpr std::chrono::seconds kStartTimeout{120};
 constexpr std::chrono::seconds kExitTimeout{60};
+// A process that should end by itself (rosbag play) and has not by then hangs: it is stopped.
+constexpr std::chrono::seconds kHangTimeout{900};
 constexpr std::chrono::milliseconds kPoll{100};
 
 bool accepts_connections(int port) {
@@ -112,7 +114,8 @@ int RosGraph::interrupt(pid_t pid) {
 
 int RosGraph::wait(pid_t pid) {
   forget(pid);
-  return app::wait_for_child(pid);
+  const int code = wait_until(pid, kHangTimeout);
+  return code >= 0 ? code : stop(pid);
 }
 
 RunResult RosGraph::run(const std::string& command) const {
