@@ -170,6 +170,7 @@ int run_cli(int argc, char** argv) {
   render_cmd->add_flag("--overwrite", render.overwrite, "Replace the views of an earlier render in --out");
   render_cmd->add_flag("--labels", render.labels, "Draw the map's classes (fixed palette) instead of its colours");
   render_cmd->add_option("--only", render.only, "Keep only the Gaussians of these classes: names (a run folder) or ids, comma-separated");
+  render_cmd->add_option("--highlight", render.highlight, "Draw the Gaussians of these classes in colour, the others grey and dim (names or ids)");
   add_backend_options(*render_cmd, render.backend);
 
   ReconstructOptions recon;

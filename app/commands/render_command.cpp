@@ -158,8 +158,10 @@ void refuse_earlier_render(const std::filesystem::path& out, bool overwrite) {
   }
 }
 
-// The class ids `only` names: ids, or names the run's summary.json lists ("labels"."ids").
-std::vector<uint16_t> wanted_classes(const std::string& only, const std::filesystem::path& map_argument) {
+// The class ids `only` (the value of `option`, --only or --highlight) names: ids, or names the
+// run's summary.json lists ("labels"."ids").
+std::vector<uint16_t> wanted_classes(const std::string& option, const std::string& only,
+                                     const std::filesystem::path& map_argument) {
   nlohmann::json ids = nlohmann::json::object();
   const std::filesystem::path summary = map_argument / "summary.json";
   if (std::filesystem::is_directory(map_argument) && std::filesystem::exists(summary)) {
@@ -179,13 +181,13 @@ std::vector<uint16_t> wanted_classes(const std::string& only, const std::filesys
     } else {
       std::string known;
       for (const auto& [name, value] : ids.items()) known += (known.empty() ? "" : ", ") + name;
-      throw splat::Error("--only: unknown class '" + item + "' (" +
+      throw splat::Error(option + ": unknown class '" + item + "' (" +
                          (known.empty() ? std::string("give class ids, or a run folder whose summary.json names them")
                                         : "the run's classes: " + known) +
                          ")");
     }
   }
-  if (wanted.empty()) throw splat::Error("--only '" + only + "': expected comma-separated class names or ids");
+  if (wanted.empty()) throw splat::Error(option + " '" + only + "': expected comma-separated class names or ids");
   return wanted;
 }
 
@@ -210,6 +212,23 @@ void keep_classes(LoadedMap& map, const std::vector<uint16_t>& wanted) {
   mapping::remove_gaussians(map.gaussians, keep);
 }
 
+// Turns the Gaussians of the other classes grey and dark (their luminance, a third of it over a
+// dim floor), so that the wanted ones stand out in their own colours.
+void highlight_classes(LoadedMap& map, const std::vector<uint16_t>& wanted) {
+  constexpr float kShC0 = 0.28209479177387814f;  // the SH DC basis: colour = kShC0 * dc + 0.5
+  splat::Gaussians& g = map.gaussians;
+  const std::size_t stride = g.sh.size() / std::max<std::size_t>(1, g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (std::find(wanted.begin(), wanted.end(), map.labels.best(i)) != wanted.end()) continue;
+    float* sh = g.sh.data() + i * stride;
+    float rgb[3];
+    for (int c = 0; c < 3; ++c) rgb[c] = std::clamp(kShC0 * sh[c] + 0.5f, 0.f, 1.f);
+    const float grey = 0.1f + 0.3f * (0.299f * rgb[0] + 0.587f * rgb[1] + 0.114f * rgb[2]);
+    for (int c = 0; c < 3; ++c) sh[c] = (grey - 0.5f) / kShC0;
+    std::fill(sh + 3, sh + stride, 0.f);  // no view-dependent colour either
+  }
+}
+
 }  // namespace
 
 int run_render(const RenderOptions& o) {
@@ -222,12 +241,13 @@ int run_render(const RenderOptions& o) {
   const Scene scene = scene_of(o);
   LoadedMap map = load_map(scene.map);
   for (const auto& notice : map.notices) std::fprintf(stderr, "notice: %s\n", notice.c_str());
-  if ((o.labels || !o.only.empty()) && map.labels.empty()) {
-    throw splat::Error(scene.map.string() + ": the map has no classes (--labels, --only): reconstruct a sequence with "
-                       "label images to make one");
+  if ((o.labels || !o.only.empty() || !o.highlight.empty()) && map.labels.empty()) {
+    throw splat::Error(scene.map.string() + ": the map has no classes (--labels, --only, --highlight): reconstruct a "
+                       "sequence with label images to make one");
   }
+  if (!o.highlight.empty()) highlight_classes(map, wanted_classes("--highlight", o.highlight, o.map));
   if (!o.only.empty()) {
-    keep_classes(map, wanted_classes(o.only, o.map));
+    keep_classes(map, wanted_classes("--only", o.only, o.map));
     if (map.gaussians.empty()) throw splat::Error("--only " + o.only + ": no Gaussian of the map is of these classes");
     std::fprintf(stderr, "--only %s: %zu Gaussians kept\n", o.only.c_str(), map.gaussians.size());
   }

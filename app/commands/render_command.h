@@ -27,6 +27,7 @@ struct RenderOptions {
   bool overwrite = false;            // replace the views of an earlier render in `out`
   bool labels = false;               // draw the map's classes (a fixed palette) instead of colour
   std::string only;                  // comma-separated classes (names or ids) whose Gaussians are kept
+  std::string highlight;             // comma-separated classes drawn in colour, the others grey and dim
 };
 
 // `gslam render`: renders a map into DIR/view_NNNN.{png,exr} and/or DIR/render.mp4:
@@ -37,7 +38,8 @@ struct RenderOptions {
 //   poses, else at 2.5 map radii about --up.
 // With `labels`, each view shows the most probable class per pixel (a map with labels: a run of
 // a sequence with label images); `only` keeps the Gaussians of the named classes, resolved by
-// the run's summary.json (names) or given as ids.
+// the run's summary.json (names) or given as ids; `highlight` keeps every Gaussian but draws
+// those of other classes grey and dim.
 // Refuses an `out` that holds an earlier render's views unless `overwrite` (which removes them).
 // Prints the path used, progress and a one-line summary; returns the process exit code. Throws
 // splat::Error.

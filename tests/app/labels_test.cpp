@@ -68,6 +68,35 @@ void expect_renders_classes(const TempDir& dir, const std::string& run) {
   }
   EXPECT_GT(static_cast<double>(same) / static_cast<double>(expected.size() / 3), 0.9);
 
+  // --highlight wall: at the same pose, wall pixels keep the plain render's colour and the others
+  // turn grey.
+  const RunResult plain = run_gslam("render " + run + " --out " + (dir / "plain").string() + " --path recorded");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const RunResult walls = run_gslam("render " + run + " --out " + (dir / "walls").string() + " --path recorded --highlight wall");
+  ASSERT_EQ(walls.exit_code, 0) << walls.output;
+  const splat::Image8 coloured = app::read_png_rgb8(dir / "plain" / "view_0000.png");
+  const splat::Image8 highlighted = app::read_png_rgb8(dir / "walls" / "view_0000.png");
+  const std::vector<uint16_t>& truth = d.load(0).labels;
+  const uint16_t wall = 1;  // the generator's class ids (classes.json)
+  std::size_t wall_pixels = 0, wall_kept = 0, other_pixels = 0, other_grey = 0, other_coloured_before = 0;
+  for (std::size_t p = 0; p < truth.size(); ++p) {
+    const uint8_t* a = &coloured.data[3 * p];
+    const uint8_t* b = &highlighted.data[3 * p];
+    const bool grey = std::abs(b[0] - b[1]) <= 2 && std::abs(b[1] - b[2]) <= 2;
+    if (truth[p] == wall) {
+      ++wall_pixels;
+      wall_kept += std::abs(a[0] - b[0]) <= 3 && std::abs(a[1] - b[1]) <= 3 && std::abs(a[2] - b[2]) <= 3;
+    } else if (truth[p] != 0) {
+      ++other_pixels;
+      other_grey += grey;
+      other_coloured_before += !(std::abs(a[0] - a[1]) <= 2 && std::abs(a[1] - a[2]) <= 2);
+    }
+  }
+  ASSERT_GT(wall_pixels, truth.size() / 20) << "the first view shows walls";
+  EXPECT_GT(double(wall_kept) / double(wall_pixels), 0.8);
+  EXPECT_GT(double(other_grey) / double(other_pixels), 0.8);
+  EXPECT_GT(double(other_coloured_before) / double(other_pixels), 0.5) << "the plain render is in colour";
+
   const RunResult only = run_gslam("render " + run + " --out " + (dir / "balls").string() + " --only ball --orbit 2");
   ASSERT_EQ(only.exit_code, 0) << only.output;
   EXPECT_NE(only.output.find("--only ball: "), std::string::npos) << only.output;
