@@ -198,7 +198,8 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
   std::vector<std::filesystem::path> files = {"trajectory.txt"};
   if (!map.empty()) {
     files.insert(files.end(), {"map.ply", "map.glb"});
-    save_map(out_ / "map.ply", map, Eigen::Quaterniond::Identity(), labels_.size() == map.size() ? &labels_ : nullptr);
+    const splat::GaussianLabels* labels = labels_.size() == map.size() ? &labels_ : nullptr;
+    save_map(out_ / "map.ply", map, Eigen::Quaterniond::Identity(), labels);
     // The world's up (the floor's normal, else the cameras'), recorded and standing map.glb
     // upright in glTF's axes (+Y up).
     Eigen::Quaterniond gltf_from_world = Eigen::Quaterniond::Identity();
@@ -211,7 +212,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
     } catch (const splat::Error& e) {  // no poses, or cameras that agree on no up: map.glb as it is
       extra_["world_up_unavailable"] = e.what();
     }
-    save_map(out_ / "map.glb", map, gltf_from_world);
+    save_map(out_ / "map.glb", map, gltf_from_world, labels);
     // The final map seen from every keyframe.
     std::filesystem::create_directories(out_ / "keyframes");
     for (std::size_t i = 0; i < records_.size() && !stopping_; ++i) {

@@ -19,6 +19,9 @@ namespace {
 
 constexpr const char* kExtension = "KHR_gaussian_splatting";
 constexpr const char* kPrefix = "KHR_gaussian_splatting:";
+// gslam's semantic labels, as application-specific attributes (glTF: names start with '_').
+const std::string kLabel = "_LABEL_", kLabelProbability = "_LABEL_PROBABILITY_";
+constexpr int kMaxLabels = 64;
 constexpr double kShC0 = 0.28209479177387814;
 // write_gltf's mark on the node whose rotation turns gslam's world frame into glTF's axes.
 constexpr const char* kGslamExtras = "gslam";
@@ -238,6 +241,29 @@ GltfSplatPrimitive decode_primitive(const tinygltf::Model& model, const tinygltf
     for (std::size_t c = 0; c < k; ++c)
       for (int ch = 0; ch < 3; ++ch) out.sh[(i * k + c) * 3 + ch] = coeffs[c][i * 3 + ch];
 
+  // Classes per Gaussian: _LABEL_0.. with _LABEL_PROBABILITY_0.., in pairs.
+  int top = 0;
+  while (top < kMaxLabels && attribute(kLabel + std::to_string(top)) >= 0) ++top;
+  if (top > 0) {
+    out.labels.top = top;
+    out.labels.ids.resize(n * std::size_t(top));
+    out.labels.probabilities.resize(n * std::size_t(top));
+    for (int t = 0; t < top; ++t) {
+      const std::string id_key = kLabel + std::to_string(t), p_key = kLabelProbability + std::to_string(t);
+      if (attribute(p_key) < 0) fail(path, where + " has " + id_key + " but no " + p_key);
+      const std::vector<float> ids = read_accessor(model, required(id_key), 1, where + " " + id_key, path, n);
+      const std::vector<float> ps = read_accessor(model, required(p_key), 1, where + " " + p_key, path, n);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!(ids[i] >= 0 && ids[i] <= 65535 && ids[i] == std::floor(ids[i])) || !(ps[i] >= 0 && ps[i] <= 1)) {
+          fail(path, where + " Gaussian " + std::to_string(i) + ": " + id_key + " " + std::to_string(ids[i]) + ", " +
+                         p_key + " " + std::to_string(ps[i]) + " (expected a class id 0..65535 and a probability)");
+        }
+        out.labels.ids[i * std::size_t(top) + std::size_t(t)] = static_cast<uint16_t>(ids[i]);
+        out.labels.probabilities[i * std::size_t(top) + std::size_t(t)] = ps[i];
+      }
+    }
+  }
+
   const auto ext_it = prim.extensions.find(kExtension);
   const tinygltf::Value ext = ext_it == prim.extensions.end() ? tinygltf::Value() : ext_it->second;
   out.kernel = string_or(ext, "kernel", "ellipse");
@@ -387,6 +413,18 @@ splat::Gaussians to_gaussians(const GltfSplatScene& scene) {
   return g;
 }
 
+splat::GaussianLabels to_labels(const GltfSplatScene& scene) {
+  splat::GaussianLabels out;
+  if (scene.primitives.empty()) return out;
+  out.top = scene.primitives.front().labels.top;
+  for (const auto& p : scene.primitives) {
+    if (p.labels.top != out.top) return {};  // some primitives unlabelled, or labelled otherwise
+    out.ids.insert(out.ids.end(), p.labels.ids.begin(), p.labels.ids.end());
+    out.probabilities.insert(out.probabilities.end(), p.labels.probabilities.begin(), p.labels.probabilities.end());
+  }
+  return out;
+}
+
 namespace {
 
 // Appends raw floats as a buffer view plus an accessor; returns the accessor index.
@@ -439,8 +477,13 @@ Eigen::Quaterniond gltf_rotation_for_up(const Eigen::Vector3d& world_up) {
   return Eigen::Quaterniond(world_from_gltf.transpose()).normalized();
 }
 
-void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g, const Eigen::Quaterniond& gltf_from_world) {
+void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g, const Eigen::Quaterniond& gltf_from_world,
+                const splat::GaussianLabels* labels) {
   splat::validate(splat::GaussiansView(g), "write_gltf " + path.string());
+  if (labels && !labels->empty() && labels->size() != g.size()) {
+    throw splat::Error("write_gltf " + path.string() + ": labels for " + std::to_string(labels->size()) +
+                       " Gaussians, the map has " + std::to_string(g.size()));
+  }
   if (!gltf_from_world.coeffs().allFinite() || std::abs(gltf_from_world.norm() - 1) > 1e-6) {
     throw splat::Error("write_gltf " + path.string() + ": the node rotation is not a unit quaternion");
   }
@@ -485,6 +528,19 @@ void write_gltf(const std::filesystem::path& path, const splat::Gaussians& g, co
         for (int ch = 0; ch < 3; ++ch) values[i * 3 + ch] = g.sh[(i * k + coeff) * 3 + ch];
       prim.attributes[std::string(kPrefix) + "SH_DEGREE_" + std::to_string(degree) + "_COEF_" + std::to_string(c)] =
           add_float_accessor(model, values, TINYGLTF_TYPE_VEC3, n, false);
+    }
+  }
+  if (labels && !labels->empty()) {
+    const std::size_t top = static_cast<std::size_t>(labels->top);
+    for (std::size_t t = 0; t < top; ++t) {
+      std::vector<float> ids(n), probabilities(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        ids[i] = labels->ids[i * top + t];
+        probabilities[i] = labels->probabilities[i * top + t];
+      }
+      prim.attributes[kLabel + std::to_string(t)] = add_float_accessor(model, ids, TINYGLTF_TYPE_SCALAR, n, false);
+      prim.attributes[kLabelProbability + std::to_string(t)] =
+          add_float_accessor(model, probabilities, TINYGLTF_TYPE_SCALAR, n, false);
     }
   }
   tinygltf::Value::Object ext;

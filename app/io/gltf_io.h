@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include "splat/gaussian_labels.h"
 #include "splat/gaussians.h"
 
 namespace app {
@@ -24,6 +25,7 @@ struct GltfSplatPrimitive {
   std::string color_space;  // as stored; unknown ones are treated as srgb_rec709_display
   bool sh_from_color0 = false;  // no SH_DEGREE_0 attribute: DC derived from COLOR_0
   double node_scale = 1;        // the node transform's uniform scale, folded into log_scales
+  splat::GaussianLabels labels;  // _LABEL_k and _LABEL_PROBABILITY_k (write_gltf), if present
 };
 
 struct GltfSplatScene {
@@ -45,6 +47,8 @@ struct GltfSplatScene {
 GltfSplatScene read_gltf_splats(const std::filesystem::path& path);
 
 // Merges the primitives into one map (highest SH degree; missing coefficients are zero).
+// The labels of the primitives, where every one has as many classes per Gaussian.
+splat::GaussianLabels to_labels(const GltfSplatScene& scene);
 // Opacities are clamped to [1e-6, 1 - 1e-6] before the logit so 0 and 1 stay finite.
 splat::Gaussians to_gaussians(const GltfSplatScene& scene);
 
@@ -65,7 +69,11 @@ Eigen::Quaterniond gltf_rotation_for_up(const Eigen::Vector3d& world_up);
 // too, are left as they are), marked in the node's extras
 // (`"gslam": {"node_rotation": "world_to_gltf"}`) so that read_gltf_splats gives the map back in
 // its world frame.
+// With `labels` (a semantic map), the Gaussians' classes go into the application-specific
+// attributes _LABEL_k (class id) and _LABEL_PROBABILITY_k, k = 0..top-1, as floats (glTF keeps
+// vertex attributes 4-byte aligned; ids up to 65535 are exact).
 void write_gltf(const std::filesystem::path& path, const splat::Gaussians& gaussians,
-                const Eigen::Quaterniond& gltf_from_world = Eigen::Quaterniond::Identity());
+                const Eigen::Quaterniond& gltf_from_world = Eigen::Quaterniond::Identity(),
+                const splat::GaussianLabels* labels = nullptr);
 
 }  // namespace app

@@ -21,6 +21,7 @@ LoadedMap load_map(const std::filesystem::path& path) {
   } else if (ext == ".glb" || ext == ".gltf") {
     GltfSplatScene scene = read_gltf_splats(path);
     out.gaussians = to_gaussians(scene);
+    out.labels = to_labels(scene);
     out.notices = std::move(scene.notices);
   } else {
     throw splat::Error(path.string() + ": unknown map format '" + ext + "', expected .ply, .glb or .gltf");
@@ -33,7 +34,7 @@ void save_map(const std::filesystem::path& path, const splat::Gaussians& gaussia
               const Eigen::Quaterniond& gltf_from_world, const splat::GaussianLabels* labels) {
   const std::string ext = path.extension().string();
   if (ext == ".ply") return write_ply(path, gaussians, labels);
-  if (ext == ".glb" || ext == ".gltf") return write_gltf(path, gaussians, gltf_from_world);
+  if (ext == ".glb" || ext == ".gltf") return write_gltf(path, gaussians, gltf_from_world, labels);
   throw splat::Error(path.string() + ": unknown map format '" + ext + "', expected .ply, .glb or .gltf");
 }
 

@@ -50,6 +50,36 @@ TEST(GltfFormat, RoundTripWithinFloatPrecision) {
   }
 }
 
+// A semantic map's classes travel as _LABEL_k / _LABEL_PROBABILITY_k and read back exactly; a
+// file without them has none, and malformed ones are one-line errors.
+TEST(GltfFormat, LabelsRoundTrip) {
+  TempDir dir;
+  gslam::test::SceneOptions o;
+  o.count = 5;
+  const splat::Gaussians map = gslam::test::make_random_scene<float>(o).gaussians;
+  splat::GaussianLabels labels;
+  labels.top = 2;
+  labels.ids = {1, 7, 3, 0, 65535, 2, 0, 0, 4, 1};
+  labels.probabilities = {0.75f, 0.25f, 1.f, 0.f, 0.5f, 0.5f, 0.f, 0.f, 0.9f, 0.1f};
+  app::write_gltf(dir / "labelled.glb", map, Eigen::Quaterniond::Identity(), &labels);
+  const app::GltfSplatScene scene = app::read_gltf_splats(dir / "labelled.glb");
+  const splat::GaussianLabels back = app::to_labels(scene);
+  EXPECT_EQ(back.top, 2);
+  EXPECT_EQ(back.ids, labels.ids);
+  EXPECT_EQ(back.probabilities, labels.probabilities);
+  EXPECT_TRUE(scene.notices.empty());
+  app::write_gltf(dir / "plain.glb", map);
+  EXPECT_TRUE(app::to_labels(app::read_gltf_splats(dir / "plain.glb")).empty());
+  splat::GaussianLabels short_labels = labels;
+  short_labels.ids.resize(4);
+  short_labels.probabilities.resize(4);
+  GSLAM_EXPECT_ERROR(app::write_gltf(dir / "bad.glb", map, Eigen::Quaterniond::Identity(), &short_labels),
+                     "labels for 2 Gaussians, the map has 5");
+  labels.probabilities[3] = 1.5f;  // not a probability
+  app::write_gltf(dir / "odd.glb", map, Eigen::Quaterniond::Identity(), &labels);
+  GSLAM_EXPECT_ERROR(app::read_gltf_splats(dir / "odd.glb"), "odd.glb", "Gaussian 1: _LABEL_1 0.000000, _LABEL_PROBABILITY_1 1.500000");
+}
+
 // Expected values from the fixtures' SOURCE.md (bevy_gaussian_splatting's conformance test).
 TEST(GltfFormat, DecodesEveryConformanceFixtureCase) {
   for (const char* file : {"khr_conformance_matrix.gltf", "khr_conformance_matrix.glb"}) {

@@ -14,3 +14,8 @@ trap 'rm -rf "$work"' EXIT
 printf '{"refine_passes": 1, "mapping": {"iterations": 3}}' > "$work/quick.json"
 "$gslam" reconstruct --out "$work/run" --max-frames 4 --config "$work/quick.json" > /dev/null 2>&1
 node "$here/validate_gltf.mjs" "$validator" "$work/run/map.glb"
+# A semantic map: its classes as application-specific attributes (_LABEL_k, _LABEL_PROBABILITY_k).
+"$gslam" generate "$work/labelled" --frames 4 --labels > /dev/null 2>&1
+"$gslam" reconstruct "$work/labelled" --out "$work/labelled_run" --config "$work/quick.json" > /dev/null 2>&1
+grep -q '"_LABEL_0"' "$work/labelled_run/map.glb" || { echo "map.glb of a labelled run has no _LABEL_0"; exit 1; }
+node "$here/validate_gltf.mjs" "$validator" "$work/labelled_run/map.glb"
