@@ -21,12 +21,13 @@ port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1
 export ROS_MASTER_URI=http://127.0.0.1:$port ROS_IP=127.0.0.1 ROS_HOME=$out/home ROS_LOG_DIR=$out/log
 
 /usr/bin/python3 - "$teddy" "$out/teddy.bag" <<'PY'
-import sys, numpy as np, rosbag, rospy
+import os, sys, numpy as np, rosbag, rospy
 from PIL import Image as PILImage
 from sensor_msgs.msg import Image, CameraInfo
 root, out = sys.argv[1], sys.argv[2]
-def listed(name):
-    return [(float(l.split()[0]), l.split()[1]) for l in open(f"{root}/{name}") if l.strip() and not l.startswith("#")]
+def listed(name):  # the listed frames whose files are there
+    rows = [l.split() for l in open(f"{root}/{name}") if l.strip() and not l.startswith("#")]
+    return [(float(t), f) for t, f in rows if os.path.exists(f"{root}/{f}")]
 rgb, depth = listed("rgb.txt"), listed("depth.txt")
 with rosbag.Bag(out, "w") as bag:
     for i, (t, f) in enumerate(rgb):
