@@ -233,6 +233,13 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
     EXPECT_NEAR(first_poses[std::size_t(i)].stamp, teddy.entries[std::size_t(i)].timestamp, 1e-6) << "frame " << i;
     EXPECT_EQ(first_poses[std::size_t(i)].child, "camera") << "the bag's images have no frame_id";
   }
+  // For RViz: the map's centres in `map`, and the map seen from the camera, while subscribed.
+  const auto cloud = graph->run("timeout 600 rostopic echo -n 1 --noarr /gslam/map_cloud");
+  EXPECT_NE(cloud.output.find("frame_id: \"map\""), std::string::npos) << cloud.output;
+  EXPECT_NE(cloud.output.find("point_step: 16"), std::string::npos) << cloud.output;
+  EXPECT_EQ(cloud.output.find("width: 0\n"), std::string::npos) << cloud.output;
+  const auto render = graph->run("timeout 600 rostopic echo -n 1 --noarr /gslam/render");
+  EXPECT_NE(render.output.find("height: 240\nwidth: 320\nencoding: \"rgb8\""), std::string::npos) << render.output;
   const auto save = graph->run("rosservice call /gslam/save");
   EXPECT_NE(save.output.find("success: True"), std::string::npos) << save.output;
   EXPECT_EQ(app::read_tum_trajectory(run / "trajectory.txt").size(), std::size_t(kFrames));
