@@ -93,8 +93,40 @@ json frames_to_json(const std::vector<SlamSystem::FramePose>& frames) {
     j.push_back({{"keyframe", f.keyframe == SlamSystem::kNoKeyframe ? json(nullptr) : json(f.keyframe)},
                  {"T_keyframe_cam", pose_to_json(f.T_keyframe_cam)}, {"tracked", f.tracked},
                  {"is_keyframe", f.is_keyframe}, {"held_out", f.held_out}});
+    if (!f.moving.empty()) {  // what the final sweep leaves out of this frame
+      j.back()["moving"] = {{"width", f.moving.width}, {"height", f.moving.height}, {"factor", f.moving.factor},
+                            {"runs", f.moving.runs}};
+    }
   }
   return j;
+}
+
+// A frame's moving mask as frames_to_json() wrote it; throws splat::Error naming the frame for
+// sizes out of range or runs that do not cover the mask exactly.
+MovingMask moving_mask_from_json(const json& j, std::size_t frame) {
+  const std::string where = "frame " + std::to_string(frame) + "'s moving mask";
+  MovingMask m;
+  m.width = j.at("width").get<int>();
+  m.height = j.at("height").get<int>();
+  m.factor = j.at("factor").get<int>();
+  if (m.width < 1 || m.width > 16384 || m.height < 1 || m.height > 16384 || m.factor < 1 || m.factor > 64) {
+    throw splat::Error(where + ": size " + std::to_string(m.width) + "x" + std::to_string(m.height) + ", factor " +
+                       std::to_string(m.factor) + " out of range");
+  }
+  const std::uint64_t pixels = std::uint64_t(m.width) * std::uint64_t(m.height);
+  std::uint64_t covered = 0;
+  const json& runs = j.at("runs");
+  if (!runs.is_array() || runs.size() > pixels + 1) throw splat::Error(where + ": runs are not a list of run lengths");
+  for (const json& run : runs) {
+    if (!run.is_number_unsigned() || run.get<std::uint64_t>() > pixels) throw splat::Error(where + ": a run is not a length");
+    m.runs.push_back(run.get<std::uint32_t>());
+    covered += m.runs.back();
+  }
+  if (covered != pixels) {
+    throw splat::Error(where + ": runs cover " + std::to_string(covered) + " pixels, the mask has " +
+                       std::to_string(pixels));
+  }
+  return m;
 }
 
 std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
@@ -103,7 +135,8 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
     const json& keyframe = f.at("keyframe");
     frames.push_back({keyframe.is_null() ? SlamSystem::kNoKeyframe : keyframe.get<std::size_t>(),
                       pose_from_json(f.at("T_keyframe_cam")), f.at("tracked").get<bool>(),
-                      f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>(), {}});
+                      f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>(),
+                      f.contains("moving") ? moving_mask_from_json(f.at("moving"), frames.size()) : MovingMask{}});
   }
   return frames;
 }

@@ -119,7 +119,7 @@ class SlamSystem {
     Eigen::Isometry3d T_keyframe_cam;
     bool tracked, is_keyframe;
     bool held_out = false;
-    MovingMask moving;  // left out of mapping (not kept in checkpoints)
+    MovingMask moving;  // left out of mapping, and of the final sweep
   };
   // Everything the system carries from one frame to the next, for checkpoints; the keyframes'
   // images excepted, which restore() loads again.

@@ -109,6 +109,22 @@ TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   ASSERT_NE(frames, std::string::npos);
   wrong.replace(frames, 8, "\"framez\"");
   GSLAM_EXPECT_ERROR(app::read_run_checkpoint(write("fields.bin", wrong)), "fields.bin", "malformed", "frames");
+  // The frames' moving masks (what the final sweep leaves out) read back exactly; runs that do
+  // not cover their mask are refused.
+  app::SlamSystem::State state = slam.state();
+  ASSERT_GE(state.frames.size(), 2u);
+  state.frames[1].moving = {4, 3, 2, {5, 3, 4}};
+  app::write_run_checkpoint(dir / "moving.bin", {state, {}});
+  const app::MovingMask back = app::read_run_checkpoint(dir / "moving.bin").slam.frames[1].moving;
+  EXPECT_EQ(back.width, 4);
+  EXPECT_EQ(back.height, 3);
+  EXPECT_EQ(back.factor, 2);
+  EXPECT_EQ(back.runs, (std::vector<uint32_t>{5, 3, 4}));
+  EXPECT_TRUE(app::read_run_checkpoint(dir / "moving.bin").slam.frames[0].moving.empty());
+  state.frames[1].moving.runs = {5, 3, 5};
+  app::write_run_checkpoint(dir / "overrun.bin", {state, {}});
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "overrun.bin"), "overrun.bin",
+                     "frame 1's moving mask: runs cover 13 pixels, the mask has 12");
   // A state that reads but does not hold together is refused by the system, not followed.
   app::RunCheckpoint c = app::read_run_checkpoint(good);
   c.slam.keyframe_world.pop_back();
