@@ -237,8 +237,16 @@ Connection::Connection(int argc, char** argv, const std::string& node_name) : im
 }
 
 Connection::~Connection() {
-  if (impl_->spinner) impl_->spinner->stop();
+  stop();
   ros::shutdown();
+}
+
+void Connection::stop() {
+  Impl& m = *impl_;
+  if (m.spinner) m.spinner->stop();
+  for (ros::Subscriber* s : {&m.colour_sub, &m.depth_sub, &m.info_sub}) s->shutdown();
+  m.save_srv.shutdown();
+  m.reset_srv.shutdown();
 }
 
 Parameters Connection::parameters() const {

@@ -67,6 +67,9 @@ class Connection {
              std::function<void(const RosCameraInfo&)> camera_info,
              std::function<std::pair<bool, std::string>(Request)> request);
   bool ok() const;  // false once ROS shut down (rosnode kill, the master gone)
+  // Stops the spinner threads (waiting for callbacks under way) and the subscriptions and
+  // services: no callback runs after it returns. The destructor does it too.
+  void stop();
 
   // One tracked frame: map -> camera (or map -> odom) on /tf stamped with the image's stamp, and
   // ~odometry. Takes the map's place from the first call (after reset_map(), the next).

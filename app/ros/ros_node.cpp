@@ -117,6 +117,22 @@ NodeSetup setup_from(const ros1::Parameters& parameters) {
   return setup;
 }
 
+// The run's handle on a source that the subscriber shares.
+class SharedSource final : public FrameSource {
+ public:
+  explicit SharedSource(std::shared_ptr<RosFrameSource> source) : source_(std::move(source)) {}
+  std::optional<ArrivedFrame> next(std::chrono::milliseconds timeout) override { return source_->next(timeout); }
+  bool finished() const override { return source_->finished(); }
+  void stop() override { source_->stop(); }
+  std::size_t delivered() const override { return source_->delivered(); }
+  std::size_t dropped() const override { return source_->dropped(); }
+  const splat::Camera& intrinsics() const override { return source_->intrinsics(); }
+  std::string describe() const override { return source_->describe(); }
+
+ private:
+  std::shared_ptr<RosFrameSource> source_;
+};
+
 // ---- The host: publishes what the run tracks, serves the services, draws the map for RViz.
 
 class RosHost final : public LiveHost {
@@ -133,10 +149,10 @@ class RosHost final : public LiveHost {
   }
 
   std::unique_ptr<FrameSource> open_source() override {
-    auto source = std::make_unique<RosFrameSource>(
-        connection_.topics(), options_.intrinsics, options_.depth_scale, options_.queue_size,
-        [this] { return connection_.ok(); });
-    source_ = source.get();
+    // The subscriber's callbacks share the queue: it outlives the run, which owns only a handle.
+    auto source = std::make_shared<RosFrameSource>(connection_.topics(), options_.intrinsics, options_.depth_scale,
+                                                   options_.queue_size, [this] { return connection_.ok(); });
+    source_ = source;
     ros1::ConnectionOptions c;
     c.map_frame = options_.map_frame;
     c.odom_frame = options_.odom_frame;
@@ -144,12 +160,15 @@ class RosHost final : public LiveHost {
     c.sync_slop = options_.sync_slop;
     c.subscriber_queue = std::max(10, options_.queue_size);
     connection_.start(
-        c, [s = source.get()](ros1::RgbdMessages m) { s->add(std::move(m)); },
-        [s = source.get()](const RosCameraInfo& info) { s->set_camera_info(info); },
+        c, [source](ros1::RgbdMessages m) { source->add(std::move(m)); },
+        [source](const RosCameraInfo& info) { source->set_camera_info(info); },
         [this](ros1::Request kind) { return request(kind); });
     drawer_ = std::thread([this] { draw_loop(); });
-    return source;
+    return std::make_unique<SharedSource>(source);
   }
+
+  // The run has ended: a service call waiting for it is answered now.
+  void close() { closed_ = true; }
 
   nlohmann::json input_json(const splat::Camera& intrinsics, const SlamConfig& config) const override {
     nlohmann::json input = run_input_json(".", "ros", intrinsics, source_ ? source_->depth_scale() : 0, 0, 0, config);
@@ -203,7 +222,7 @@ class RosHost final : public LiveHost {
     }
     // The run serves requests at least every 100 ms; it may have ended meanwhile.
     while (done.wait_for(std::chrono::milliseconds(200)) != std::future_status::ready) {
-      if (!connection_.ok()) return {false, "gslam_ros is shutting down"};
+      if (closed_ || !connection_.ok()) return {false, "gslam_ros is shutting down"};
     }
     return done.get();
   }
@@ -280,11 +299,12 @@ class RosHost final : public LiveHost {
 
   ros1::Connection& connection_;
   const RosNodeOptions options_;
-  RosFrameSource* source_ = nullptr;
+  std::shared_ptr<RosFrameSource> source_;
   std::vector<double> stamps_;  // the run's thread's: one per frame processed
   Clock::time_point next_path_ = Clock::now();
   std::mutex request_mutex_;
   std::deque<LiveRequest> requests_;
+  std::atomic<bool> closed_{false};
   std::unique_ptr<splat::Rasterizer> drawing_rasterizer_;
   std::mutex draw_mutex_;
   std::condition_variable draw_wake_;
@@ -329,6 +349,16 @@ int run_ros_node(int argc, char** argv) {
   live.backend.backend = o.backend;
   live.backend.threads = o.threads;
   RosHost host(connection, o);
+  // Before the host goes (and however the run ends): no service call waits on it any more, and
+  // no callback runs.
+  struct StopFirst {
+    RosHost& host;
+    ros1::Connection& connection;
+    ~StopFirst() {
+      host.close();
+      connection.stop();
+    }
+  } stop_first{host, connection};
   return run_live(live, setup.config, &host);
 }
 

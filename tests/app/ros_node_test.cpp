@@ -329,4 +329,32 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
 #endif
 }
 
+
+// Ctrl-C while the camera goes on publishing (a looping bag): the node stops taking frames, writes
+// its run folder and exits cleanly, whatever arrives meanwhile.
+TEST_F(RosNode, CtrlCWhileTheCameraKeepsPublishingWritesTheRunFolder) {
+  if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+#ifndef GSLAM_HAVE_ROS1
+  GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
+#else
+  app::DatasetOptions options;
+  options.max_frames = kFrames;
+  const app::Dataset teddy = app::open_dataset(gslam::test::shared_data(kTeddy), options);
+  std::string why_not;
+  NodeRun r = start_node({}, why_not);
+  GSLAM_REQUIRE_TOOL(r.graph, why_not);
+  const std::filesystem::path bag = r.graph->dir() / "teddy.bag";
+  gslam::test::write_teddy_bag(teddy, 0, kFrames, bag);
+  std::vector<std::string> play = {"rosbag", "play", "--clock", "--loop", "-q", "--topics"};
+  play.insert(play.end(), kImageTopics.begin(), kImageTopics.end());
+  play.insert(play.end(), {"--bags", bag.string()});
+  r.graph->spawn(play, "play.log");  // stopped by the graph
+  EXPECT_GE(wait_for_poses(r.tf, 10).size(), 10u) << r.log();
+  EXPECT_EQ(r.graph->interrupt(r.node), 0) << r.log();
+  const nlohmann::json summary = read_json(r.run / "summary.json");
+  EXPECT_TRUE(summary.at("live").at("interrupted").get<bool>());
+  EXPECT_GE(app::read_tum_trajectory(r.run / "trajectory.txt").size(), 10u);
+#endif
+}
+
 }  // namespace
