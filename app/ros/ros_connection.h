@@ -25,7 +25,7 @@
 
 namespace app::ros1 {
 
-// A colour and a depth image whose stamps the approximate-time filter paired.
+// A colour and a depth image paired by nearest stamp (within ConnectionOptions::sync_slop).
 struct RgbdMessages {
   RosImage colour, depth;
   std::string frame_id;  // the colour image's header.frame_id

@@ -22,6 +22,7 @@
 #include "io/trajectory.h"
 #include "support/expect_error.h"
 #include "support/run_command.h"
+#include "support/require_tool.h"
 #include "support/temp_dir.h"
 #include "support/teddy_recording.h"
 #include "support/test_data.h"
@@ -46,15 +47,6 @@ constexpr int kFrames = 20;
 // Bag and folder runs read the same floats, so their trajectories agree to rounding; the issue's
 // target is 0.1 mm.
 constexpr double kTrajectoryTolerance = 1e-4;
-
-// Skips the test (or fails it, with GSLAM_REQUIRE_ROS_TESTS) with `why`.
-#ifdef GSLAM_REQUIRE_ROS_TESTS
-#define GSLAM_REQUIRE_TOOL(ok, why) \
-  if (!(ok)) GTEST_FAIL() << "required (GSLAM_REQUIRE_ROS_TESTS): " << (why)
-#else
-#define GSLAM_REQUIRE_TOOL(ok, why) \
-  if (!(ok)) GTEST_SKIP() << (why)
-#endif
 
 std::string mcap_writer_missing() {
   const std::filesystem::path tools = GSLAM_TOOLS_DIR;

@@ -18,6 +18,7 @@
 #include "io/trajectory.h"
 #include "support/ros_graph.h"
 #include "support/teddy_recording.h"
+#include "support/require_tool.h"
 #include "support/temp_dir.h"
 #include "support/test_data.h"
 
@@ -32,19 +33,18 @@ constexpr int kFrames = 40;
 // A hung node is a failure, not a wait forever; a loaded machine gets far more than it needs.
 constexpr std::chrono::seconds kEventTimeout{600};
 
-#ifdef GSLAM_REQUIRE_ROS_TESTS
-#define GSLAM_REQUIRE_TOOL(ok, why) \
-  if (!(ok)) GTEST_FAIL() << "required (GSLAM_REQUIRE_ROS_TESTS): " << (why)
-#else
-#define GSLAM_REQUIRE_TOOL(ok, why) \
-  if (!(ok)) GTEST_SKIP() << (why)
-#endif
-
 #ifdef GSLAM_ROS_BINARY
 const std::string kNode = GSLAM_ROS_BINARY;
 #else
 const std::string kNode;
 #endif
+
+// The first `frames` shared teddy frames.
+app::Dataset open_teddy(int frames) {
+  app::DatasetOptions options;
+  options.max_frames = frames;
+  return app::open_dataset(gslam::test::shared_data(kTeddy), options);
+}
 
 nlohmann::json read_json(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -214,9 +214,7 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  app::DatasetOptions options;
-  options.max_frames = 2 * kFrames;
-  const app::Dataset teddy = app::open_dataset(gslam::test::shared_data(kTeddy), options);
+  const app::Dataset teddy = open_teddy(2 * kFrames);
   std::string why_not;
   NodeRun r = start_node({"_queue_size:=1000"}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
@@ -295,9 +293,7 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  app::DatasetOptions options;
-  options.max_frames = kFrames;
-  const app::Dataset teddy = app::open_dataset(gslam::test::shared_data(kTeddy), options);
+  const app::Dataset teddy = open_teddy(kFrames);
   std::string why_not;
   NodeRun r = start_node({"_queue_size:=1000", "_odom_frame:=world", "_camera_frame:=kinect"}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
@@ -337,9 +333,7 @@ TEST_F(RosNode, CtrlCWhileTheCameraKeepsPublishingWritesTheRunFolder) {
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  app::DatasetOptions options;
-  options.max_frames = kFrames;
-  const app::Dataset teddy = app::open_dataset(gslam::test::shared_data(kTeddy), options);
+  const app::Dataset teddy = open_teddy(kFrames);
   std::string why_not;
   NodeRun r = start_node({}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
