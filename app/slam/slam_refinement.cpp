@@ -64,10 +64,17 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     map_ = std::move(snapshot);
   };
   // Every frame's view of each Gaussian, before the sweep: ghosts (what moving objects left) go
-  // now, and the densifying pass seeds what they covered.
-  for (const std::size_t i : frames) mapper_.observe_free_space(frame_at(i), T_world_cam[i].inverse());
-  result.pruned += mapper_.prune();
+  // now, and the densifying passes seed what they covered. What those passes seed is tested the
+  // same way after them: a person who stood still joined the scene, and the frames where it walks
+  // off again show it where tracking does not find it moving.
+  auto carve = [&](std::size_t first) {
+    for (const std::size_t i : frames) mapper_.observe_free_space(frame_at(i), T_world_cam[i].inverse(), first);
+    result.pruned += mapper_.prune();
+  };
+  carve(0);
+  const std::size_t seeded_from = mapper_.map().size();
   for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
+    if (pass == config_.refine_densify_passes && pass > 0) carve(seeded_from);
     std::shuffle(order.begin(), order.end(), rng);
     for (const std::size_t i : order) {
       if (stop && stop()) {

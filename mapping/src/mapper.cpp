@@ -205,13 +205,13 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   return loss;
 }
 
-void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world) {
+void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, std::size_t first) {
   const int w = f.width(), h = f.height();
   const Eigen::Matrix3f r = T_cam_world.linear().cast<float>();
   const Eigen::Vector3f t = T_cam_world.translation().cast<float>();
   seen_through_.resize(map_.size(), 0);
   seen_on_.resize(map_.size(), 0);
-  for (std::size_t i = 0; i < map_.size(); ++i) {
+  for (std::size_t i = first; i < map_.size(); ++i) {
     const Eigen::Vector3f p = r * Eigen::Vector3f(map_.means[i * 3], map_.means[i * 3 + 1], map_.means[i * 3 + 2]) + t;
     if (!(p.z() > 0.1f)) continue;
     const float u = static_cast<float>(f.camera.fx) * p.x() / p.z() + static_cast<float>(f.camera.cx);

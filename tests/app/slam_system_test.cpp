@@ -249,8 +249,8 @@ TEST(SlamSystem, FinalRefinementMovesPosesWhereAsked) {
 }
 
 // The sweep keeps frames in memory within refine_cache_mib: each is loaded once instead of once
-// per pass (and once more before the passes, where every frame counts the ghosts it sees), and
-// the result is the same as reloading them.
+// per pass (and twice more, before the passes and after the densifying one, where every frame
+// counts the ghosts it sees), and the result is the same as reloading them.
 TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
   gslam::test::TempDir dir;
   const app::Dataset dataset = synthetic_dataset(dir, 4);
@@ -272,7 +272,7 @@ TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
   const auto cached = refine(app::SlamConfig{}.refine_cache_mib, cached_loads);
   const auto reloaded = refine(0, reloads);
   EXPECT_EQ(cached_loads, dataset.entries.size());
-  EXPECT_EQ(reloads, (1 + 3) * dataset.entries.size());
+  EXPECT_EQ(reloads, (2 + 3) * dataset.entries.size());
   ASSERT_EQ(cached.first.size(), reloaded.first.size());
   for (std::size_t i = 0; i < cached.first.size(); ++i) EXPECT_TRUE(cached.first[i].isApprox(reloaded.first[i], 0)) << i;
   EXPECT_EQ(cached.second, reloaded.second);

@@ -137,8 +137,8 @@ class Mapper {
   // Counts a view's evidence for each Gaussian being a ghost (MapperConfig::ghost_views): its
   // centre seen through, or on the measured surface; ignored pixels tell nothing. Keyframes
   // count themselves; the final sweep has every frame (as refinement_frame() made it) counted
-  // before it starts.
-  void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world);
+  // before it starts and again after its densifying passes, for the Gaussians from `first` on.
+  void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, std::size_t first = 0);
   // Removes transparent, oversized and ghost Gaussians; returns how many.
   std::size_t prune();
   // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
