@@ -99,8 +99,8 @@ TEST(MovingObjects, TrackingLeavesOutAPersonWalkingThroughTheView) {
 // After a whole run (tracking, mapping, the final sweep), what is left of the movers where they
 // passed: carving (Gaussians that views see through are pruned) removes what the person left
 // while it stood still, joined the scene and was mapped, and what the sweep seeded from the frames
-// where it walked off and was not found; the frames that show where it stood leave those pixels
-// out of the sweep. Fewer than 1% of the map's Gaussians are left there (the target).
+// where it walked off and was not found (carved again after the sweep's densifying pass). Fewer
+// than 1% of the map's Gaussians are left there (the target).
 TEST(MovingObjects, CarvingRemovesGhostsWhereObjectsPassed) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
