@@ -53,6 +53,7 @@ void run(benchmark::State& state, const std::string& backend_name, Then then) {
   splat::ForwardResult f;
   std::vector<float> jacobian;  // reused, as tracking does
   rasterizer->reset_stage_times();
+  rasterizer->reset_transfers();
   for (auto _ : state) {
     f = rasterizer->forward(w->gaussians, w->camera, splat::images_only());
     if (then == Then::kBackward) benchmark::DoNotOptimize(rasterizer->backward(f, d_image));
@@ -68,6 +69,15 @@ void run(benchmark::State& state, const std::string& backend_name, Then then) {
   const std::size_t intersections = f.stats.intersections;
   state.counters["coverage"] = covered / static_cast<double>(pixels);
   state.counters["isects"] = static_cast<double>(intersections);
+  // Bytes over the bus per iteration, each way, as MiB, and the map's own size for scale.
+  const splat::Rasterizer::Transfers moved = rasterizer->transfers();
+  const double iterations = static_cast<double>(state.iterations()), mib = 1 << 20;
+  state.counters["up_MiB"] = static_cast<double>(moved.to_device) / iterations / mib;
+  state.counters["down_MiB"] = static_cast<double>(moved.to_host) / iterations / mib;
+  const splat::Gaussians& g = w->gaussians;
+  state.counters["map_MiB"] =
+      static_cast<double>((g.means.size() + g.log_scales.size() + g.rotations.size() + g.opacity_logits.size() + g.sh.size()) *
+                          sizeof(float)) / mib;
   // Time per stage and iteration (Vulkan timestamps, CPU wall time), the four largest.
   std::vector<std::pair<double, std::string>> stages;
   for (const auto& [name, ms] : rasterizer->stage_times_ms()) stages.push_back({ms, name});

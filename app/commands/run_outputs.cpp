@@ -165,6 +165,10 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
       {"held_out_frames", std::count_if(records_.begin(), records_.end(), [](const FrameRecord& r) { return r.held_out; })},
       {"peak_memory_mib", peak_memory_mib()},
       {"device_memory_mib", static_cast<double>(rasterizer_.device_memory_bytes()) / (1 << 20)},
+      // Host <-> device traffic of the whole run (none on the CPU backend).
+      {"transfers_mib",
+       {{"to_device", static_cast<double>(rasterizer_.transfers().to_device) / (1 << 20)},
+        {"to_host", static_cast<double>(rasterizer_.transfers().to_host) / (1 << 20)}}},
   };
   // Moving objects left out of tracking and mapping: their share of each frame's pixels.
   double moving_sum = 0, moving_max = 0;

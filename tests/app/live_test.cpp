@@ -171,7 +171,13 @@ TEST(CliLive, WindowUnderXvfbShowsMapAndTrajectory) {
   EXPECT_GT(count_map_pixels_in_panel(picture), 20000) << "map not drawn";
   EXPECT_GT(count_colour_in_panel(picture, app::kTrajectoryRgb), 20) << "trajectory not drawn";
   EXPECT_GT(count_colour_in_panel(picture, app::kCameraRgb), 20) << "camera not drawn";
-  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "summary.json"));
+  ASSERT_TRUE(std::filesystem::exists(dir / "run" / "summary.json"));
+  // The run's bus traffic: the maps uploaded and the gradients read back on Vulkan, none on the CPU.
+  const auto transfers = read_json(dir / "run" / "summary.json").at("transfers_mib");
+  for (const char* way : {"to_device", "to_host"}) {
+    if (splat::vulkan_backend_built()) EXPECT_GT(transfers.at(way).get<double>(), 0) << way;
+    else EXPECT_EQ(transfers.at(way).get<double>(), 0) << way;
+  }
 }
 
 }  // namespace

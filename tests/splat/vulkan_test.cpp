@@ -164,6 +164,46 @@ TEST(VulkanBackend, BuffersGrowWithTheMapAndReportDeviceMemory) {
   }
 }
 
+// The bus, as the backend counts it (what a device-resident mapping loop must cut): today every
+// render uploads the whole map (nothing else grows with it) and every backward pass downloads
+// every parameter's gradient and uploads only the image gradients. The CPU backend moves nothing.
+TEST(VulkanBackend, TransfersCountTheMapUpAndItsGradientsDown) {
+  GSLAM_REQUIRE_BACKEND(cpu, "cpu");
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan");
+  struct Moved {
+    splat::Rasterizer::Transfers forward, backward;
+  };
+  const int width = 96, height = 64;
+  const std::size_t pixels = std::size_t(width) * height;
+  auto measure = [&](splat::Rasterizer& r, int count) {
+    const auto s = gslam::test::make_random_scene<float>(scene(11, count, 1, width, height, 0.9));
+    r.reset_transfers();
+    const auto f = r.forward(s.gaussians, s.camera, splat::images_only());
+    Moved m;
+    m.forward = r.transfers();
+    r.reset_transfers();
+    splat::ImageGrads d;
+    d.rgb.assign(f.rgb.size(), 1e-3f);
+    d.alpha.assign(f.alpha.size(), 1e-3f);
+    d.depth.assign(f.depth.size(), 1e-3f);
+    r.backward(f, d);
+    m.backward = r.transfers();
+    return m;
+  };
+  const Moved cpu_moved = measure(cpu, 300);
+  EXPECT_EQ(cpu_moved.forward.to_device + cpu_moved.forward.to_host + cpu_moved.backward.to_device + cpu_moved.backward.to_host, 0u);
+  const int small = 300, large = 2300;
+  const Moved a = measure(gpu, small), b = measure(gpu, large);
+  const std::size_t per_gaussian = (3 + 3 + 4 + 1 + 4 * 3) * sizeof(float);  // SH degree 1
+  const std::size_t added = std::size_t(large - small);
+  EXPECT_EQ(b.forward.to_device - a.forward.to_device, added * per_gaussian);
+  EXPECT_GE(a.forward.to_device, std::size_t(small) * per_gaussian);
+  EXPECT_GE(a.forward.to_host, pixels * 6 * sizeof(float));  // RGB, alpha, depth, normalized depth
+  EXPECT_EQ(a.backward.to_device, pixels * 5 * sizeof(float));  // d RGB, d alpha, d depth
+  EXPECT_EQ(b.backward.to_device, a.backward.to_device);
+  EXPECT_GE(b.backward.to_host - a.backward.to_host, added * per_gaussian);
+}
+
 // The portable reduction is deterministic bit for bit (float atomics add in varying order).
 TEST(VulkanBackend, PortableReductionIsDeterministic) {
   GSLAM_REQUIRE_BACKEND(gpu, "vulkan_portable");

@@ -121,6 +121,13 @@ class Rasterizer {
   virtual void pose_jacobian(const ForwardResult& forward, std::vector<float>& jacobian) = 0;
   // Device memory the backend holds now, in bytes (0 for the CPU backend).
   virtual std::size_t device_memory_bytes() const { return 0; }
+  // Bytes moved between host and device memory since the last reset, each way (none for the CPU
+  // backend): what a render or a mapping iteration costs on the bus.
+  struct Transfers {
+    std::size_t to_device = 0, to_host = 0;
+  };
+  virtual Transfers transfers() const { return {}; }
+  virtual void reset_transfers() {}
   // Time per stage since the last reset, in milliseconds, where the backend can measure it:
   // device time per shader (Vulkan timestamps) or wall time per pipeline stage (CPU). For
   // profiling.

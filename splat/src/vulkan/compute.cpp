@@ -205,6 +205,7 @@ void CommandBatch::copy(const Buffer& from, Buffer& to, std::size_t bytes) {
 
 void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes) {
   if (bytes == 0) return;
+  uploaded_bytes_ += bytes;
   if (buffer.mapped()) {
     std::memcpy(buffer.mapped(), data, bytes);
     return;
@@ -216,6 +217,7 @@ void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes) {
 
 void CommandBatch::download(const Buffer& buffer, void* data, std::size_t bytes) {
   if (bytes == 0) return;
+  downloaded_bytes_ += bytes;
   const Buffer* source = &buffer;
   if (!buffer.mapped()) {
     Buffer& staging = next_staging(bytes);

@@ -60,6 +60,10 @@ class CommandBatch {
   // Buffer to host memory after run(); `data` must stay valid until then.
   void download(const Buffer& buffer, void* data, std::size_t bytes);
   void run();
+  // Bytes given to upload() and download() since the last reset (mapped or staged alike).
+  std::size_t uploaded_bytes() const { return uploaded_bytes_; }
+  std::size_t downloaded_bytes() const { return downloaded_bytes_; }
+  void reset_transfer_counts() { uploaded_bytes_ = downloaded_bytes_ = 0; }
   // GPU time per kernel name over the batches run so far (timestamps after each dispatch;
   // empty if the queue has none), and a reset.
   const std::map<std::string, double>& kernel_ms() const { return kernel_ms_; }
@@ -86,6 +90,7 @@ class CommandBatch {
   VkQueryPool queries_ = VK_NULL_HANDLE;
   std::vector<const char*> timed_;  // kernel name of each timestamp after the first
   std::map<std::string, double> kernel_ms_;
+  std::size_t uploaded_bytes_ = 0, downloaded_bytes_ = 0;
 };
 
 }  // namespace splat::vk

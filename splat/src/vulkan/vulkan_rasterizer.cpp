@@ -183,6 +183,8 @@ class VulkanRasterizer final : public Rasterizer {
   std::size_t device_memory_bytes() const override { return context_->allocated_bytes(); }
   std::map<std::string, double> stage_times_ms() const override { return batch_.kernel_ms(); }
   void reset_stage_times() override { batch_.reset_kernel_ms(); }
+  Transfers transfers() const override { return {batch_.uploaded_bytes(), batch_.downloaded_bytes()}; }
+  void reset_transfers() override { batch_.reset_transfer_counts(); }
 
   ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
                         const RenderSettings& settings) override {
