@@ -2,7 +2,9 @@
 # Packs what the Vulkan checks need on another x86-64 Linux machine with a GPU driver into the
 # git-ignored .device-data/: the Release binaries, their non-glibc libraries, and the
 # third-party data (../shared/data) with teddy cut to its first N frames (default 64) so the
-# bundle stays under 64 MiB. Run scripts/gpu_check.sh there. Usage: scripts/gpu_bundle.sh [N]
+# bundle stays under 64 MiB. Run scripts/gpu_check.sh there. Usage: scripts/gpu_bundle.sh [N|bench]
+# `bench` packs only the rasterizer's tests and benchmarks and the donut map (7 MiB): the full
+# bundle's libraries (OpenCV, FFmpeg, ROS) now pass the device tool's 64 MiB.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 frames=${1:-64}
@@ -11,11 +13,18 @@ bundle=.device-data
 [ -x build/app/gslam ] || { echo "gpu_bundle: build first (scripts/build.sh)" >&2; exit 1; }
 [ -d "$shared" ] || { echo "gpu_bundle: $shared not found" >&2; exit 1; }
 rm -rf "$bundle" && mkdir -p "$bundle/bin" "$bundle/lib" "$bundle/data"
-cp build/app/gslam build/bench/rasterizer_bench build/tests/{splat_tests,app_tests,system_tests} "$bundle/bin/"
+if [ "$frames" = bench ]; then
+  cp build/bench/{rasterizer_bench,mapping_host_bench} build/tests/splat_tests "$bundle/bin/"
+else
+  cp build/app/gslam build/bench/{rasterizer_bench,mapping_host_bench} build/tests/{splat_tests,app_tests,system_tests} "$bundle/bin/"
+fi
 # Libraries the target lacks or has in other versions; glibc and libstdc++ come from the target.
 for b in "$bundle"/bin/*; do ldd "$b" | awk '{print $3}' | grep '^/' || true; done | sort -u |
   grep -v -E 'libc\.so|libm\.so|libstdc\+\+|libgcc_s|libpthread|libdl\.so|librt\.so|ld-linux|libvulkan|libGLdispatch|libOpenGL' |
   xargs -I{} cp -L {} "$bundle/lib/"
+if [ "$frames" = bench ]; then
+  cp -r "$shared"/{INDEX.md,v3dg_donut_3dgs_ply} "$bundle/data/" && du -sh "$bundle" && exit 0
+fi
 cp -r "$shared"/{INDEX.md,gsplat_reference_render_brush,khr_gaussian_splatting_fixtures_bevy,supersplat_fruit_drops_3dgs_ply,v3dg_donut_3dgs_ply} "$bundle/data/"
 src=$shared/tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy
 dst=$bundle/data/tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy

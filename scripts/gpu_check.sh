@@ -11,7 +11,7 @@ export LD_LIBRARY_PATH=$B/lib:/usr/local/nvidia/lib64:/usr/local/nvidia/lib
 icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 [ -f $icd ] && export VK_DRIVER_FILES=$icd
 mkdir -p /work/shared; [ -e /work/main ] || ln -s "$R" /work/main; [ -e /work/shared/data ] || ln -s "$B/data" /work/shared/data
-mkdir -p build/app && cp "$B/bin/gslam" build/app/gslam
+[ -x "$B/bin/gslam" ] && mkdir -p build/app && cp "$B/bin/gslam" build/app/gslam
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv | tee "$OUT/gpu.txt"
 STEP=${1:-all}
 T=$B/data/tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy
@@ -22,6 +22,7 @@ if [ "$STEP" = all ] || [ "$STEP" = tests ]; then
 fi
 if [ "$STEP" = all ] || [ "$STEP" = bench ]; then
   timeout 200 "$B/bin/rasterizer_bench" --benchmark_filter=vulkan 2>&1 | tee "$OUT/bench.txt"
+  timeout 60 "$B/bin/mapping_host_bench" 2>&1 | tee "$OUT/host_bench.txt"  # the host's share of a mapping step
 fi
 if [ "$STEP" = all ] || [ "$STEP" = teddy ]; then
   timeout 240 build/app/gslam reconstruct "$T" --backend vulkan --out /tmp/teddy_vk > "$OUT/teddy_vk.log" 2>&1; echo "reconstruct rc=$?"; tail -3 "$OUT/teddy_vk.log"
