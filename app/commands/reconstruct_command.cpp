@@ -154,10 +154,10 @@ int run_reconstruct(const ReconstructOptions& o) {
     outputs.extra()["vignetting"] = {{"k1", vignetting.k1}, {"k2", vignetting.k2}};
     outputs.extra()["refinement"] = {{"frames", refined.frames}, {"passes", config.refine_passes},
                                      {"iterations_per_visit", config.refine_iterations}, {"pruned", refined.pruned},
-                                     {"visits", refined.visits}, {"stopped_early", refined.stopped},
+                                     {"ghosts", refined.ghosts}, {"visits", refined.visits}, {"stopped_early", refined.stopped},
                                      {"seconds", refine_progress.elapsed_seconds()}};
-    std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned\n",
-                 refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned);
+    std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned (%zu ghosts)\n",
+                 refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned, refined.ghosts);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   outputs.set_mapping(slam.mapping_totals(), slam.loop_events());

@@ -138,6 +138,7 @@ void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent
   extra_["loops"] = {{"accepted", accepted}, {"rejected", loops.size() - accepted}, {"events", events}};
   extra_["mapping"] = {{"keyframes_mapped", t.keyframes_mapped},   {"keyframes_skipped", t.keyframes_skipped},
                        {"gaussians_added", t.gaussians_added},     {"gaussians_pruned", t.gaussians_pruned},
+                       {"ghosts_pruned", t.ghosts_pruned},
                        {"iterations", t.iterations},               {"last_loss", t.last_loss},
                        {"seconds", t.mapping_ms / 1000}};
 }
@@ -178,7 +179,8 @@ nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyf
     moving_max = std::max(moving_max, r.moving_share);
     moving_frames += r.moving_share > 0;
   }
-  j["dynamic"] = {{"masked_share_mean", moving_sum / n}, {"masked_share_max", moving_max}, {"frames_with_moving", moving_frames}};
+  j["dynamic"] = {{"masked_share_mean", moving_sum / n}, {"masked_share_max", moving_max}, {"frames_with_moving", moving_frames},
+                  {"ghosts_removed", extra_.contains("mapping") ? extra_["mapping"].value("ghosts_pruned", std::size_t{0}) : 0}};
   if (has_errors_) {
     j["ate_rmse_m"] = errors_.ate_rmse;
     j["ate_matched_frames"] = errors_.matched;

@@ -185,6 +185,7 @@ std::vector<LoopEvent> loop_events_from_json(const json& j) {
 json totals_to_json(const MappingTotals& t) {
   return {{"keyframes_mapped", t.keyframes_mapped}, {"keyframes_skipped", t.keyframes_skipped},
           {"keyframes_caught_up", t.keyframes_caught_up}, {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
+          {"ghosts_pruned", t.ghosts_pruned},
           {"iterations", t.iterations},             {"last_loss", t.last_loss},
           {"mapping_ms", t.mapping_ms}};
 }
@@ -196,6 +197,7 @@ MappingTotals totals_from_json(const json& j) {
   t.keyframes_caught_up = j.value("keyframes_caught_up", std::size_t{0});  // absent from older checkpoints
   t.gaussians_added = j.at("gaussians_added").get<std::size_t>();
   t.gaussians_pruned = j.at("gaussians_pruned").get<std::size_t>();
+  t.ghosts_pruned = j.value("ghosts_pruned", std::size_t{0});  // absent from older checkpoints
   t.iterations = j.at("iterations").get<std::size_t>();
   t.last_loss = j.at("last_loss").get<double>();
   t.mapping_ms = j.at("mapping_ms").get<double>();

@@ -67,9 +67,14 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   // now, and the densifying passes seed what they covered. What those passes seed is tested the
   // same way after them: a person who stood still joined the scene, and the frames where it walks
   // off again show it where tracking does not find it moving.
+  auto prune_map = [&] {
+    const mapping::Mapper::Pruned pruned = mapper_.prune();
+    result.pruned += pruned.gaussians;
+    result.ghosts += pruned.ghosts;
+  };
   auto carve = [&](std::size_t first) {
     for (const std::size_t i : frames) mapper_.observe_free_space(frame_at(i), T_world_cam[i].inverse(), first);
-    result.pruned += mapper_.prune();
+    prune_map();
   };
   carve(0);
   const std::size_t seeded_from = mapper_.map().size();
@@ -89,7 +94,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       if (visited) visited(++result.visits, total);
     }
   }
-  result.pruned += mapper_.prune();
+  prune_map();
   if (config_.relocalize_iterations > 0) {
     tracking::TrackingConfig t = config_.tracking;
     t.pyramid = {t.pyramid.back()};
@@ -105,6 +110,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
   std::lock_guard lock(mutex_);
   map_ = std::move(snapshot);  // with the poses below, under one lock
+  totals_.ghosts_pruned += result.ghosts;
   // The refined frames keep their keyframe, at the pose the sweep gave them.
   for (const std::size_t i : frames) {
     if (frames_[i].keyframe != kNoKeyframe) frames_[i].T_keyframe_cam = keyframe_world_[frames_[i].keyframe].inverse() * T_world_cam[i];

@@ -220,6 +220,7 @@ double SlamSystem::map_keyframe(const KeyframeJob& job) {
   ++totals_.keyframes_mapped;
   totals_.gaussians_added += stats.added;
   totals_.gaussians_pruned += stats.pruned;
+  totals_.ghosts_pruned += stats.ghosts;
   totals_.iterations += static_cast<std::size_t>(stats.iterations);
   totals_.last_loss = stats.final_loss;
   totals_.mapping_ms += ms;

@@ -48,6 +48,7 @@ struct MappingTotals {
   std::size_t keyframes_skipped = 0;  // threaded: replaced in the queue, and not (yet) mapped
   std::size_t keyframes_caught_up = 0;  // of those, mapped later by catch_up_mapping()
   std::size_t gaussians_added = 0, gaussians_pruned = 0;
+  std::size_t ghosts_pruned = 0;  // of all the run removed, the final sweep's included
   std::size_t iterations = 0;
   double last_loss = 0;  // the last window step's loss
   double mapping_ms = 0;
@@ -96,7 +97,7 @@ class SlamSystem {
   // refine_all_frames.
   std::vector<std::size_t> refine_frames() const;
   struct Refinement {
-    std::size_t frames = 0, visits = 0, pruned = 0;
+    std::size_t frames = 0, visits = 0, pruned = 0, ghosts = 0;  // ghosts: of the pruned
     bool stopped = false;  // stop() ended it early
   };
   // The final sweep (SlamConfig::refine_passes) over refine_frames(), each loaded with

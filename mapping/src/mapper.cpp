@@ -238,22 +238,23 @@ void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry
   }
 }
 
-std::size_t Mapper::prune() {
+Mapper::Pruned Mapper::prune() {
   std::vector<uint8_t> keep(map_.size(), 1);
   seen_through_.resize(map_.size(), 0);
   seen_on_.resize(map_.size(), 0);
   const float min_logit = static_cast<float>(std::log(config_.prune_opacity / (1 - config_.prune_opacity)));
   const float max_log_scale = static_cast<float>(std::log(config_.prune_max_scale));
-  std::size_t removed = 0;
+  Pruned removed;
   for (std::size_t i = 0; i < map_.size(); ++i) {
     const float largest = std::max({map_.log_scales[i * 3], map_.log_scales[i * 3 + 1], map_.log_scales[i * 3 + 2]});
     const bool ghost = seen_through_[i] >= config_.ghost_views && seen_through_[i] > 2 * seen_on_[i];
     if (map_.opacity_logits[i] < min_logit || largest > max_log_scale || ghost) {
       keep[i] = 0;
-      ++removed;
+      ++removed.gaussians;
+      removed.ghosts += ghost;
     }
   }
-  if (removed > 0) {
+  if (removed.gaussians > 0) {
     remove_gaussians(map_, keep);
     adam_.remove(keep);
     std::size_t out = 0;
@@ -388,7 +389,9 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
     stats.final_loss = optimize_step(kf, Step::kWindow, nullptr);
     ++stats.iterations;
   }
-  stats.pruned = prune();
+  const Pruned pruned = prune();
+  stats.pruned = pruned.gaussians;
+  stats.ghosts = pruned.ghosts;
   // Bounded memory: drop the oldest stored keyframe (the recent ones are the covisible ones
   // in a continuous sequence).
   if (keyframes_.size() > config_.max_keyframes) keyframes_.pop_front();

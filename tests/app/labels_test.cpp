@@ -131,6 +131,7 @@ TEST(CliLabels, FusedClassesRenderBackOnHeldOutViewsEvenFromNoisyLabels) {
     }
     const nlohmann::json summary = read_json(std::filesystem::path(run) / "summary.json");
     EXPECT_GT(summary.at("labels").at("classes").at("wall").get<std::size_t>(), 0u);
+    EXPECT_TRUE(summary.at("dynamic").at("ghosts_removed").is_number_unsigned());
     // Scored against the clean labels (beside the colour folder), whatever the run was given.
     const RunResult e = run_gslam("eval " + run);
     ASSERT_EQ(e.exit_code, 0) << e.output;

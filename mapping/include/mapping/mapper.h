@@ -89,6 +89,7 @@ struct PoseAdam {
 
 struct MappingStats {
   std::size_t added = 0, pruned = 0;
+  std::size_t ghosts = 0;  // of the pruned, ghosts (MapperConfig::ghost_views)
   int iterations = 0;
   double final_loss = 0;
   std::size_t window = 0;
@@ -139,8 +140,12 @@ class Mapper {
   // count themselves; the final sweep has every frame (as refinement_frame() made it) counted
   // before it starts and again after its densifying passes, for the Gaussians from `first` on.
   void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, std::size_t first = 0);
-  // Removes transparent, oversized and ghost Gaussians; returns how many.
-  std::size_t prune();
+  // Removes transparent, oversized and ghost Gaussians; returns how many, and how many of them
+  // were ghosts.
+  struct Pruned {
+    std::size_t gaussians = 0, ghosts = 0;
+  };
+  Pruned prune();
   // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
   // anchors) by world_correction[k] (T_world_new * T_world_old^-1), for every keyframe added so
   // far. Gaussians seeded by the final refinement are anchored to the keyframe last added.
