@@ -113,6 +113,7 @@ struct NodeRun {
   std::unique_ptr<RosGraph> graph;
   pid_t node = -1;
   std::filesystem::path run, tf;
+  std::filesystem::path bag;  // start_node_with_teddy_bag's
   std::string log() const { return gslam::test::read_text(graph->dir() / "node.log"); }
 };
 NodeRun start_node(const std::vector<std::string>& args, std::string& why_not) {
@@ -137,6 +138,15 @@ NodeRun start_node(const std::vector<std::string>& args, std::string& why_not) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
+  return r;
+}
+
+// start_node, and the first kFrames teddy frames written as a bag in the graph's folder (NodeRun::bag).
+NodeRun start_node_with_teddy_bag(const std::vector<std::string>& args, std::string& why_not) {
+  NodeRun r = start_node(args, why_not);
+  if (!r.graph) return r;
+  r.bag = r.graph->dir() / "teddy.bag";
+  gslam::test::write_teddy_bag(open_teddy(kFrames), 0, kFrames, r.bag);
   return r;
 }
 
@@ -293,15 +303,12 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  const app::Dataset teddy = open_teddy(kFrames);
   std::string why_not;
-  NodeRun r = start_node({"_queue_size:=1000", "_odom_frame:=world", "_camera_frame:=kinect"}, why_not);
+  NodeRun r = start_node_with_teddy_bag({"_queue_size:=1000", "_odom_frame:=world", "_camera_frame:=kinect"}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
-  const std::filesystem::path bag = r.graph->dir() / "teddy.bag";
-  gslam::test::write_teddy_bag(teddy, 0, kFrames, bag);
   std::vector<std::string> topics = kImageTopics;
   topics.insert(topics.end(), {"/tf", "/tf_static"});
-  ASSERT_EQ(play_bag(*r.graph, bag, topics), 0) << gslam::test::read_text(r.graph->dir() / "play.log");
+  ASSERT_EQ(play_bag(*r.graph, r.bag, topics), 0) << gslam::test::read_text(r.graph->dir() / "play.log");
   // Every frame is tracked (as ~save writes the run folder, between frames); a pose goes on /tf
   // where odometry covers its stamp.
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
@@ -333,15 +340,12 @@ TEST_F(RosNode, CtrlCWhileTheCameraKeepsPublishingWritesTheRunFolder) {
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  const app::Dataset teddy = open_teddy(kFrames);
   std::string why_not;
-  NodeRun r = start_node({}, why_not);
+  NodeRun r = start_node_with_teddy_bag({}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
-  const std::filesystem::path bag = r.graph->dir() / "teddy.bag";
-  gslam::test::write_teddy_bag(teddy, 0, kFrames, bag);
   std::vector<std::string> play = {"rosbag", "play", "--clock", "--loop", "-q", "--topics"};
   play.insert(play.end(), kImageTopics.begin(), kImageTopics.end());
-  play.insert(play.end(), {"--bags", bag.string()});
+  play.insert(play.end(), {"--bags", r.bag.string()});
   r.graph->spawn(play, "play.log");  // stopped by the graph
   EXPECT_GE(wait_for_poses(r.tf, 10).size(), 10u) << r.log();
   EXPECT_EQ(r.graph->interrupt(r.node), 0) << r.log();
