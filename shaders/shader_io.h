@@ -85,6 +85,37 @@ struct FrameParams {
   uint sh_direction_gradient;  // 1: backpropagate through the SH view direction
 };
 
+// The mapping loss (splat::MappingLoss, src/vulkan/mapping_loss.cpp). Per-workgroup partial sums
+// of its shaders, kLossPartials doubles per workgroup of kGroupSize pixels, in these slots:
+GSLAM_CONST uint kLossColorL1 = 0u;     // sum of |recorded - target| over the colour channels
+GSLAM_CONST uint kLossDepthL1 = 1u;     // sum of |depth residual| over measured pixels
+GSLAM_CONST uint kLossDssim = 2u;       // sum of 1 - SSIM over the colour channels
+GSLAM_CONST uint kLossVignetteK1 = 3u;  // dL/dk1
+GSLAM_CONST uint kLossVignetteK2 = 4u;  // dL/dk2
+GSLAM_CONST uint kLossPartials = 5u;
+// D-SSIM statistics per colour channel: x, y, x^2, y^2, xy (x recorded, y target); the SSIM
+// gradient has three per channel: dS/d(mu_x), dS/d(E[x^2]), dS/d(E[xy]) (losses.cpp's da, db, dc).
+GSLAM_CONST uint kSsimStats = 5u;
+GSLAM_CONST uint kSsimGrads = 3u;
+// The D-SSIM window: 11 taps, a Gaussian of sigma 1.5.
+GSLAM_CONST uint kSsimRadius = 5u;
+GSLAM_CONST uint kSsimTaps = 11u;
+
+// One mapping-loss evaluation (storage buffer, std430, scalars only; doubles first so C++ and
+// GLSL agree on every offset). The doubles keep the CPU's precision where it computes in double.
+struct LossParams {
+  double fx, fy, cx, cy;  // pixels
+  double k1, k2;          // vignetting gain 1 + k1 r^2 + k2 r^4
+  double color_scale;     // color_weight / (3 W H)
+  double depth_scale;     // depth_weight / measured pixels; 0 when none is measured
+  double alpha_threshold; // depth is normalized by alpha above this
+  float ssim_scale;       // ssim_weight / (3 W H), in the D-SSIM's float precision
+  float taps[kSsimTaps];  // normalized window, computed on the host as losses.cpp does
+  uint width, height;
+  uint has_ignore;        // 1: the ignore mask is bound
+  uint ssim;              // 1: the D-SSIM term is on
+};
+
 #ifdef __cplusplus
 }  // namespace splat::io
 #endif

@@ -115,6 +115,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"mapping", "refine_pose_rotation_learning_rate", &m.refine_pose_rotation_learning_rate},
       {"mapping", "refine_vignetting_rate", &m.refine_vignetting_rate},
       {"mapping", "isotropic", &m.isotropic},
+      {"mapping", "device_resident", &m.device_resident},
       {"mapping", "densify_alpha", &m.densify_alpha},
       {"mapping", "depth_error_factor", &m.depth_error_factor},
       {"mapping", "refine_seed_depth_holes", &m.refine_seed_depth_holes},

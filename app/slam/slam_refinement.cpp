@@ -57,7 +57,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   // map() follows the sweep's Gaussian count: a snapshot is published after each visit that
   // changed it (the densifying passes only; a copy per visit of the others would cost more than
   // it tells), so a progress line reading map()->size() sees Gaussians being added.
-  std::size_t published = mapper_.map().size();
+  std::size_t published = mapper_.size();
   auto publish = [&] {
     auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
     std::lock_guard lock(mutex_);
@@ -77,7 +77,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     prune_map();
   };
   carve(0);
-  const std::size_t seeded_from = mapper_.map().size();
+  const std::size_t seeded_from = mapper_.size();
   for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
     if (pass == config_.refine_densify_passes && pass > 0) carve(seeded_from);
     std::shuffle(order.begin(), order.end(), rng);
@@ -90,7 +90,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
                      pass < config_.refine_densify_passes);
       T_world_cam[i] = T_cam_world.inverse();
-      if (mapper_.map().size() != published) publish(), published = mapper_.map().size();
+      if (mapper_.size() != published) publish(), published = mapper_.size();
       if (visited) visited(++result.visits, total);
     }
   }

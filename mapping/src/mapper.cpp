@@ -12,6 +12,12 @@
 #include "splat/se3.h"
 
 namespace mapping {
+namespace {
+
+// The resident map's key of the frame refine() fits; keyframes are stored under their numbers.
+constexpr uint64_t kRefineTarget = ~uint64_t{0};
+
+}  // namespace
 
 void MapperConfig::validate(const std::string& prefix) const {
   const splat::FieldCheck check(prefix);
@@ -48,13 +54,48 @@ Mapper::Mapper(splat::Rasterizer& rasterizer, const MapperConfig& config)
     : rasterizer_(rasterizer), config_(config), adam_(config.adam), rng_(config.random_seed) {
   config_.validate();
   map_.sh_degree = config_.seed.sh_degree;
+  if (config_.device_resident) device_ = rasterizer.make_resident_map(config_.seed.sh_degree);
+}
+
+const splat::Gaussians& Mapper::map() const {
+  pull_from_device(false);
+  return map_;
+}
+
+void Mapper::pull_from_device(bool moments) const {
+  if (!device_ || (host_current_ && (host_adam_current_ || !moments))) return;
+  if (moments) {
+    splat::AdamMoments m;
+    device_->read(map_, &m);
+    adam_.restore({std::move(m.m), std::move(m.v), std::move(m.steps)});
+    host_adam_current_ = true;
+  } else {
+    device_->read(map_, nullptr);
+  }
+  host_current_ = true;
+}
+
+void Mapper::push_to_device() {
+  if (!device_) return;
+  const GaussianAdam::State adam = adam_.state();
+  const splat::AdamMoments moments{adam.m, adam.v, adam.steps};
+  // A map never stepped has no optimizer state yet: it starts from zero moments.
+  device_->assign(map_, adam.steps.size() == map_.size() ? &moments : nullptr);
+  host_current_ = host_adam_current_ = true;
+}
+
+std::vector<float> Mapper::group(splat::ParamGroup group) const {
+  if (device_ && !host_current_) return device_->read_group(group);
+  return splat::param_group(map_, group);
 }
 
 std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
                             std::size_t anchor) {
   std::vector<float> mask(f.depth.size(), 1.f);
-  if (!map_.empty()) {
-    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, T_cam_world), splat::images_only());
+  if (size() > 0) {
+    const splat::Camera camera = splat::posed(f.camera, T_cam_world);
+    const splat::ForwardResult render =
+        device_ ? device_->render(camera, splat::images_only()) : rasterizer_.forward(map_, camera, splat::images_only());
     std::vector<float> errors;
     for (std::size_t p = 0; p < f.depth.size(); ++p) {
       if (f.depth[p] > 0 && render.alpha[p] > config_.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));
@@ -81,11 +122,21 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
     filled = f;
     filled.depth = fill_depth_holes(f.depth, f.width(), f.height());
   }
-  const std::size_t added = seed_from_depth(fill_holes ? filled : f, T_cam_world.inverse(), config_.seed, map_, mask);
-  adam_.append(added, map_.sh_degree);
-  anchors_.resize(map_.size(), static_cast<uint32_t>(anchor));
-  seen_through_.resize(map_.size(), 0);
-  seen_on_.resize(map_.size(), 0);
+  const splat::RgbdFrame& seeded = fill_holes ? filled : f;
+  std::size_t added = 0;
+  if (device_) {
+    splat::Gaussians seeds;
+    seeds.sh_degree = config_.seed.sh_degree;
+    added = seed_from_depth(seeded, T_cam_world.inverse(), config_.seed, seeds, mask);
+    device_->append(seeds);
+    device_changed();
+  } else {
+    added = seed_from_depth(seeded, T_cam_world.inverse(), config_.seed, map_, mask);
+    adam_.append(added, map_.sh_degree);
+  }
+  anchors_.resize(size(), static_cast<uint32_t>(anchor));
+  seen_through_.resize(size(), 0);
+  seen_on_.resize(size(), 0);
   return added;
 }
 
@@ -145,6 +196,36 @@ void Mapper::step_vignetting(const std::array<double, 2>& gradient) {
 }
 
 double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
+  const splat::MappingStepResult result =
+      device_ ? device_step(kf, step == Step::kWindow ? kf.number : kRefineTarget, step) : host_step(kf, step);
+  if (step == Step::kRefine && config_.refine_vignetting_rate > 0) step_vignetting(result.d_loss_d_vignetting);
+  if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
+    step_pose(kf.T_cam_world, kf.pose, result.d_loss_d_pose, config_.pose_learning_rate, config_.pose_rotation_learning_rate);
+  } else if (step == Step::kRefine && pose) {
+    step_pose(kf.T_cam_world, *pose, result.d_loss_d_pose, config_.refine_pose_learning_rate,
+              config_.refine_pose_rotation_learning_rate);
+  }
+  return result.loss;
+}
+
+splat::MappingStepResult Mapper::device_step(const Keyframe& kf, uint64_t key, Step step) {
+  splat::MappingLoss loss;
+  loss.color_weight = config_.color_weight;
+  loss.ssim_weight = config_.ssim_weight;
+  loss.depth_weight = step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight;
+  loss.depth_alpha_threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
+  loss.vignetting_k1 = vignetting_.k1;
+  loss.vignetting_k2 = vignetting_.k2;
+  const AdamConfig& a = adam_.config();
+  const splat::AdamRates rates{a.means, a.log_scales, a.rotations, a.opacity_logits, a.sh_dc, a.sh_rest, a.hyper};
+  const splat::MappingStepResult result =
+      device_->step(key, splat::posed(kf.frame.camera, kf.T_cam_world), loss, rates,
+                    step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale, config_.isotropic);
+  device_changed();
+  return result;
+}
+
+splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
   const splat::RgbdFrame& f = kf.frame;
   const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
   splat::ImageGrads d;
@@ -172,25 +253,18 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
   }
   const std::vector<float>& target_rgb = f.ignore.empty() ? f.rgb : ignoring_rgb;
   const std::vector<float>& target_depth = f.ignore.empty() ? f.depth : ignoring_depth;
-  double loss = splat::l1_loss<float>(colour, target_rgb, 3, {}, d.rgb, config_.color_weight);
+  splat::MappingStepResult result;
+  result.loss = splat::l1_loss<float>(colour, target_rgb, 3, {}, d.rgb, config_.color_weight);
   if (config_.ssim_weight > 0) {
-    loss += splat::dssim_loss<float>(colour, target_rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
+    result.loss += splat::dssim_loss<float>(colour, target_rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
   }
-  if (vignetted) {
-    const std::array<double, 2> d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);
-    if (learn_vignetting) step_vignetting(d_vignetting);
-  }
+  if (vignetted) result.d_loss_d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);
   d.alpha.assign(render.alpha.size(), 0.f);
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
-  loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, target_depth, threshold, d.depth, d.alpha,
-                                                 step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
+  result.loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, target_depth, threshold, d.depth, d.alpha,
+                                                        step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
   splat::BackwardResult backward = rasterizer_.backward(render, d);
-  if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
-    step_pose(kf.T_cam_world, kf.pose, backward.d_loss_d_pose, config_.pose_learning_rate, config_.pose_rotation_learning_rate);
-  } else if (step == Step::kRefine && pose) {
-    step_pose(kf.T_cam_world, *pose, backward.d_loss_d_pose, config_.refine_pose_learning_rate,
-              config_.refine_pose_rotation_learning_rate);
-  }
+  result.d_loss_d_pose = backward.d_loss_d_pose;
   splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {
     // The three log scales move together (they start equal) and rotations stay fixed.
@@ -202,17 +276,24 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
     std::fill(grads.rotations.begin(), grads.rotations.end(), 0.f);
   }
   adam_.step(map_, grads, step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale);
-  return loss;
+  return result;
 }
 
 void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, std::size_t first) {
   const int w = f.width(), h = f.height();
   const Eigen::Matrix3f r = T_cam_world.linear().cast<float>();
   const Eigen::Vector3f t = T_cam_world.translation().cast<float>();
-  seen_through_.resize(map_.size(), 0);
-  seen_on_.resize(map_.size(), 0);
-  for (std::size_t i = first; i < map_.size(); ++i) {
-    const Eigen::Vector3f p = r * Eigen::Vector3f(map_.means[i * 3], map_.means[i * 3 + 1], map_.means[i * 3 + 2]) + t;
+  // The means alone, kept until the device map changes: the sweep asks for every frame.
+  if (device_ && !host_current_ && !means_cached_) {
+    device_means_ = device_->read_group(splat::ParamGroup::kMeans);
+    means_cached_ = true;
+  }
+  const std::vector<float>& means = device_ && !host_current_ ? device_means_ : map_.means;
+  const std::size_t n = size();
+  seen_through_.resize(n, 0);
+  seen_on_.resize(n, 0);
+  for (std::size_t i = first; i < n; ++i) {
+    const Eigen::Vector3f p = r * Eigen::Vector3f(means[i * 3], means[i * 3 + 1], means[i * 3 + 2]) + t;
     if (!(p.z() > 0.1f)) continue;
     const float u = static_cast<float>(f.camera.fx) * p.x() / p.z() + static_cast<float>(f.camera.cx);
     const float v = static_cast<float>(f.camera.fy) * p.y() / p.z() + static_cast<float>(f.camera.cy);
@@ -239,24 +320,33 @@ void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry
 }
 
 Mapper::Pruned Mapper::prune() {
-  std::vector<uint8_t> keep(map_.size(), 1);
-  seen_through_.resize(map_.size(), 0);
-  seen_on_.resize(map_.size(), 0);
+  const std::size_t n = size();
+  const std::vector<float> opacity_logits = group(splat::ParamGroup::kOpacityLogits);
+  const std::vector<float> log_scales = group(splat::ParamGroup::kLogScales);
+  std::vector<uint8_t> keep(n, 1);
+  seen_through_.resize(n, 0);
+  seen_on_.resize(n, 0);
   const float min_logit = static_cast<float>(std::log(config_.prune_opacity / (1 - config_.prune_opacity)));
   const float max_log_scale = static_cast<float>(std::log(config_.prune_max_scale));
   Pruned removed;
-  for (std::size_t i = 0; i < map_.size(); ++i) {
-    const float largest = std::max({map_.log_scales[i * 3], map_.log_scales[i * 3 + 1], map_.log_scales[i * 3 + 2]});
+  for (std::size_t i = 0; i < n; ++i) {
+    const float largest = std::max({log_scales[i * 3], log_scales[i * 3 + 1], log_scales[i * 3 + 2]});
     const bool ghost = seen_through_[i] >= config_.ghost_views && seen_through_[i] > 2 * seen_on_[i];
-    if (map_.opacity_logits[i] < min_logit || largest > max_log_scale || ghost) {
+    if (opacity_logits[i] < min_logit || largest > max_log_scale || ghost) {
       keep[i] = 0;
       ++removed.gaussians;
       removed.ghosts += ghost;
     }
   }
   if (removed.gaussians > 0) {
-    remove_gaussians(map_, keep);
-    adam_.remove(keep);
+    if (device_ && !host_current_) {
+      device_->keep(keep);
+      device_changed();
+    } else {  // the host's copy stays current, the device's follows it
+      remove_gaussians(map_, keep);
+      if (!device_ || host_adam_current_) adam_.remove(keep);
+      if (device_) device_->keep(keep);
+    }
     std::size_t out = 0;
     for (std::size_t i = 0; i < keep.size(); ++i)
       if (keep[i]) anchors_[out] = anchors_[i], seen_through_[out] = seen_through_[i], seen_on_[out++] = seen_on_[i];
@@ -273,8 +363,9 @@ splat::RgbdFrame Mapper::refinement_frame(const splat::RgbdFrame& frame) const {
 
 double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
                       int iterations, bool densify_first) {
-  if (map_.empty()) return 0;
+  if (size() == 0) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
+  if (device_) device_->set_target(kRefineTarget, kf.frame);
   if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
@@ -289,6 +380,7 @@ std::vector<std::pair<std::size_t, Eigen::Isometry3d>> Mapper::keyframe_poses() 
 }
 
 MapperState Mapper::state() const {
+  pull_from_device(true);
   MapperState s;
   s.map = map_;
   s.adam = adam_.state();
@@ -351,6 +443,10 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   seen_through_ = std::move(s.seen_through);
   seen_on_ = std::move(s.seen_on);
   rng_ = restored_rng;
+  push_to_device();
+  if (device_) {
+    for (const Keyframe& kf : keyframes_) device_->set_target(kf.number, kf.frame);
+  }
 }
 
 void Mapper::correct_keyframes(const std::vector<Eigen::Isometry3d>& world_correction) {
@@ -358,6 +454,7 @@ void Mapper::correct_keyframes(const std::vector<Eigen::Isometry3d>& world_corre
     throw splat::Error("Mapper::correct_keyframes: " + std::to_string(world_correction.size()) + " corrections for " +
                        std::to_string(added_) + " keyframes");
   }
+  pull_from_device(true);
   std::vector<Eigen::Quaternionf> rotation;
   for (const auto& C : world_correction) rotation.emplace_back(Eigen::Quaterniond(C.linear()).cast<float>());
   for (std::size_t i = 0; i < map_.size(); ++i) {
@@ -372,19 +469,21 @@ void Mapper::correct_keyframes(const std::vector<Eigen::Isometry3d>& world_corre
     q[0] = turned.w(), q[1] = turned.x(), q[2] = turned.y(), q[3] = turned.z();
   }
   for (Keyframe& kf : keyframes_) kf.T_cam_world = splat::orthonormalized(kf.T_cam_world * world_correction[kf.number].inverse());
+  push_to_device();
 }
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {
   MappingStats stats;
   keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
+  if (device_) device_->set_target(newest.number, newest.frame);
   observe_free_space(newest.frame, newest.T_cam_world);
   stats.added = densify(newest.frame, newest.T_cam_world, false, newest.number);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();
   // Half the steps on the new keyframe, the rest spread over the window at random.
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
-  for (int it = 0; it < config_.iterations && !map_.empty(); ++it) {
+  for (int it = 0; it < config_.iterations && size() > 0; ++it) {
     Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
     stats.final_loss = optimize_step(kf, Step::kWindow, nullptr);
     ++stats.iterations;
@@ -394,7 +493,10 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   stats.ghosts = pruned.ghosts;
   // Bounded memory: drop the oldest stored keyframe (the recent ones are the covisible ones
   // in a continuous sequence).
-  if (keyframes_.size() > config_.max_keyframes) keyframes_.pop_front();
+  if (keyframes_.size() > config_.max_keyframes) {
+    if (device_) device_->drop_target(keyframes_.front().number);
+    keyframes_.pop_front();
+  }
   return stats;
 }
 

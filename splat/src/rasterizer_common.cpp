@@ -3,8 +3,11 @@
 
 #include "splat/error.h"
 #include "splat/rasterizer.h"
+#include "splat/resident_map.h"
 
 namespace splat {
+
+std::unique_ptr<ResidentMap> Rasterizer::make_resident_map(int) { return nullptr; }
 
 template <typename Scalar>
 void validate_image_grads(const ForwardResultT<Scalar>& forward,

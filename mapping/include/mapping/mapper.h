@@ -3,6 +3,7 @@
 #include <array>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -12,6 +13,7 @@
 #include "mapping/initialize.h"
 #include "mapping/vignetting.h"
 #include "splat/rasterizer.h"
+#include "splat/resident_map.h"
 #include "splat/rgbd_frame.h"
 
 namespace mapping {
@@ -77,6 +79,11 @@ struct MapperConfig {
   // front end 2e-4 / 5e-5 helped on teddy and the synthetic room (3.08 -> 1.24, 0.39 -> 0.31 cm).
   double pose_learning_rate = 0, pose_rotation_learning_rate = 0;
   uint32_t random_seed = 1;
+  // Where the backend can keep the map on its device (Vulkan), the map, its Adam state and the
+  // stored keyframes stay there and each step computes the loss there too: only scalars cross
+  // the bus per step. false renders the host's map and computes the loss on the host, as the CPU
+  // backend always does (the reference).
+  bool device_resident = true;
   // Throws splat::Error naming the first field out of range, as `prefix` + field name.
   void validate(const std::string& prefix = "MapperConfig.") const;
 };
@@ -156,7 +163,10 @@ class Mapper {
   // `number` as add_keyframe() was given it. Throws splat::Error on an inconsistent state.
   void restore(MapperState state, const std::function<splat::RgbdFrame(std::size_t number)>& load);
 
-  const splat::Gaussians& map() const { return map_; }
+  // The map; with a device-resident map, a whole-map transfer when the device has changed it.
+  const splat::Gaussians& map() const;
+  std::size_t size() const { return device_ ? device_->size() : map_.size(); }
+  bool device_resident() const { return device_ != nullptr; }
   const Vignetting& vignetting() const { return vignetting_; }
   std::size_t keyframes() const { return keyframes_.size(); }
   // The stored keyframes' current poses, each with its number in the order they were added.
@@ -179,6 +189,19 @@ class Mapper {
   // where `pose` is given.
   enum class Step { kWindow, kRefine };
   double optimize_step(Keyframe& kf, Step step, PoseAdam* pose);
+  // optimize_step's loss on the device map (the target stored under `key`); returns the loss and
+  // the pose gradient.
+  splat::MappingStepResult device_step(const Keyframe& kf, uint64_t key, Step step);
+  // optimize_step's loss on the host (the reference), then the map's Adam step.
+  splat::MappingStepResult host_step(const Keyframe& kf, Step step);
+  // The map's means, opacity logits or log scales, from wherever the map lives.
+  std::vector<float> group(splat::ParamGroup group) const;
+  // Makes map_ (and with `moments`, the Adam state) the device's; after a host change, pushes
+  // them back. Both no-ops without a device map.
+  void pull_from_device(bool moments) const;
+  void push_to_device();
+  // After the device changed its map: the host's copies are stale.
+  void device_changed() { host_current_ = host_adam_current_ = means_cached_ = false; }
   // One Adam step of a pose from the loss's pose gradient, at these rates.
   void step_pose(Eigen::Isometry3d& T_cam_world, PoseAdam& adam, const splat::PoseGradient& gradient,
                  double translation_rate, double rotation_rate) const;
@@ -187,8 +210,13 @@ class Mapper {
 
   splat::Rasterizer& rasterizer_;
   MapperConfig config_;
-  splat::Gaussians map_;
-  GaussianAdam adam_;
+  // The map: on the host, or a cache of the device's (device_ set), refreshed on demand.
+  mutable splat::Gaussians map_;
+  mutable GaussianAdam adam_;
+  std::unique_ptr<splat::ResidentMap> device_;
+  mutable bool host_current_ = true, host_adam_current_ = true;
+  std::vector<float> device_means_;  // the device map's means while means_cached_
+  bool means_cached_ = false;
   std::deque<Keyframe> keyframes_;
   Vignetting vignetting_;
   struct {

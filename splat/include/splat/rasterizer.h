@@ -13,6 +13,8 @@
 
 namespace splat {
 
+class ResidentMap;
+
 struct RenderSettings {
   std::array<float, 3> background{0.f, 0.f, 0.f};  // RGB behind the splats
   // Highest SH degree evaluated; -1 uses the map's. Lower values ignore the extra coefficients.
@@ -133,6 +135,10 @@ class Rasterizer {
   // profiling.
   virtual std::map<std::string, double> stage_times_ms() const { return {}; }
   virtual void reset_stage_times() {}
+  // A map kept by this backend between calls, with its Adam state (resident_map.h), so mapping
+  // steps move no map over a bus; it must not outlive the rasterizer. Null where the backend
+  // works on the host's map anyway (CPU): callers then use forward() and backward().
+  virtual std::unique_ptr<ResidentMap> make_resident_map(int sh_degree);
 };
 
 // Throws splat::Error unless every non-empty image gradient has the forward result's size.

@@ -188,43 +188,48 @@ void CommandBatch::dispatch(const Kernel& kernel, std::initializer_list<const Bu
   }
 }
 
-void CommandBatch::fill_zero(Buffer& buffer, std::size_t bytes) {
+void CommandBatch::fill_zero(Buffer& buffer, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
   begin_recording();
-  vkCmdFillBuffer(commands_, buffer.handle(), 0, (bytes + 3) / 4 * 4, 0);
+  vkCmdFillBuffer(commands_, buffer.handle(), offset, (bytes + 3) / 4 * 4, 0);
   barrier();
 }
 
-void CommandBatch::copy(const Buffer& from, Buffer& to, std::size_t bytes) {
+void CommandBatch::copy(const Buffer& from, Buffer& to, std::size_t bytes, std::size_t from_offset,
+                        std::size_t to_offset) {
   if (bytes == 0) return;
   begin_recording();
-  const VkBufferCopy region{0, 0, bytes};
+  const VkBufferCopy region{from_offset, to_offset, bytes};
   vkCmdCopyBuffer(commands_, from.handle(), to.handle(), 1, &region);
   barrier();
 }
 
-void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes) {
+void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
   uploaded_bytes_ += bytes;
   if (buffer.mapped()) {
-    std::memcpy(buffer.mapped(), data, bytes);
+    std::memcpy(static_cast<char*>(buffer.mapped()) + offset, data, bytes);
     return;
   }
   Buffer& staging = next_staging(bytes);
   std::memcpy(staging.mapped(), data, bytes);
-  copy(staging, buffer, bytes);
+  copy(staging, buffer, bytes, 0, offset);
 }
 
-void CommandBatch::download(const Buffer& buffer, void* data, std::size_t bytes) {
+void CommandBatch::download(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
   downloaded_bytes_ += bytes;
   const Buffer* source = &buffer;
+  std::size_t from = offset;
   if (!buffer.mapped()) {
     Buffer& staging = next_staging(bytes);
-    copy(buffer, staging, bytes);
+    copy(buffer, staging, bytes, offset, 0);
     source = &staging;
+    from = 0;
   }
-  after_run_.push_back([source, data, bytes] { std::memcpy(data, source->mapped(), bytes); });
+  after_run_.push_back([source, data, bytes, from] {
+    std::memcpy(data, static_cast<const char*>(source->mapped()) + from, bytes);
+  });
 }
 
 Buffer& CommandBatch::next_staging(std::size_t bytes) {

@@ -52,13 +52,14 @@ class CommandBatch {
   // groups_x x groups_y workgroups; nothing is recorded for zero groups.
   void dispatch(const Kernel& kernel, std::initializer_list<const Buffer*> buffers,
                 std::initializer_list<uint32_t> push, uint32_t groups_x, uint32_t groups_y = 1);
-  void fill_zero(Buffer& buffer, std::size_t bytes);
-  void copy(const Buffer& from, Buffer& to, std::size_t bytes);
-  // Host data to the buffer, now when it is mapped (the GPU is idle between batches),
-  // else through a staging copy recorded here.
-  void upload(Buffer& buffer, const void* data, std::size_t bytes);
-  // Buffer to host memory after run(); `data` must stay valid until then.
-  void download(const Buffer& buffer, void* data, std::size_t bytes);
+  void fill_zero(Buffer& buffer, std::size_t bytes, std::size_t offset = 0);  // offset: 4-byte aligned
+  void copy(const Buffer& from, Buffer& to, std::size_t bytes, std::size_t from_offset = 0,
+            std::size_t to_offset = 0);
+  // Host data to the buffer at `offset` bytes, now when it is mapped (the GPU is idle between
+  // batches), else through a staging copy recorded here.
+  void upload(Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset = 0);
+  // Buffer from `offset` bytes to host memory after run(); `data` must stay valid until then.
+  void download(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0);
   void run();
   // Bytes given to upload() and download() since the last reset (mapped or staged alike).
   std::size_t uploaded_bytes() const { return uploaded_bytes_; }

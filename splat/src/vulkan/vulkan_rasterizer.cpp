@@ -19,18 +19,19 @@
 #include "rasterize_forward_spv.h"
 #include "rasterize_pose_jvp_spv.h"
 #include "render_stats.h"
+#include "resident_io.h"
 #include "shader_io.h"
 #include "splat/error.h"
 #include "tiles_count_spv.h"
 #include "tiles_emit_spv.h"
 #include "tiles_finish_spv.h"
 #include "vulkan/device_sort.h"
+#include "vulkan/rasterizer_core.h"
 
 namespace splat::vk {
 namespace {
 
-constexpr uint32_t kParamFloats =
-    11;  // d_params per Gaussian: means 3, log-scales 3, rotation 4, opacity 1
+constexpr uint32_t kParamFloats = io::kGeometryFloats;  // d_params per Gaussian
 
 uint32_t groups_for(std::size_t count) {
   return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
@@ -76,6 +77,7 @@ struct FrameState {
         transmittance(c) {}
 
   const void* owner = nullptr;
+  DeviceMap map;  // the map this frame rendered: its own uploaded copy or a resident map
   Buffer frame, means, log_scales, rotations, opacity_logits, sh;
   Buffer means2d, conics, depths, radii, colors, opacities, tile_counts;
   Buffer depth_keys, depth_order, depth_keys_tmp, depth_order_tmp, cull, offsets, total;
@@ -143,7 +145,7 @@ void download_into(CommandBatch& batch, const Buffer& buffer, std::vector<T>& ou
   batch.download(buffer, out.data(), count * sizeof(T));
 }
 
-class VulkanRasterizer final : public Rasterizer {
+class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
  public:
   explicit VulkanRasterizer(const VulkanOptions& options)
       : context_(std::make_shared<Context>(options)),
@@ -185,6 +187,52 @@ class VulkanRasterizer final : public Rasterizer {
   void reset_stage_times() override { batch_.reset_kernel_ms(); }
   Transfers transfers() const override { return {batch_.uploaded_bytes(), batch_.downloaded_bytes()}; }
   void reset_transfers() override { batch_.reset_transfer_counts(); }
+  std::unique_ptr<ResidentMap> make_resident_map(int sh_degree) override {
+    return vk::make_resident_map(*this, sh_degree);
+  }
+
+  // RasterizerCore
+  Context& context() override { return *context_; }
+  CommandBatch& batch() override { return batch_; }
+  std::unique_lock<std::mutex> lock() override { return std::unique_lock(mutex_); }
+  PrefixSum& prefix_sum() override { return scan_; }
+  std::shared_ptr<void> render(const DeviceMap& map, const Camera& camera,
+                               const RenderSettings& settings, ForwardResult* images) override {
+    camera.validate("rasterize");
+    std::shared_ptr<FrameState> state = acquire_state();
+    ForwardResult local;
+    ForwardResult& f = images ? *images : local;
+    f.camera = camera;
+    f.settings = settings;
+    f.settings.intermediates = false;
+    f.gaussians.sh_degree = map.sh_degree;
+    render(*state, f, &map, images != nullptr);
+    return state;
+  }
+  Images images(const std::shared_ptr<void>& frame) override {
+    const FrameState& s = *std::static_pointer_cast<FrameState>(frame);
+    return {&s.rgb, &s.alpha, &s.depth};
+  }
+  Gradients record_backward(const std::shared_ptr<void>& frame, const Buffer& d_rgb,
+                            const Buffer& d_alpha, const Buffer& d_depth,
+                            std::vector<float>& pose_partials) override {
+    FrameState& s = *std::static_pointer_cast<FrameState>(frame);
+    record_backward(s, d_rgb, d_alpha, d_depth, {1u, 1u, 1u});
+    download_into(batch_, pose_partials_, pose_partials,
+                  std::size_t(groups_for(s.count)) * io::kPosePartials);
+    return {&d_params_, &d_sh_};
+  }
+  PoseGradient pose_gradient(const std::vector<float>& partials, const Camera& camera) const override {
+    Eigen::Matrix3d d_w = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d d_t = Eigen::Vector3d::Zero();
+    for (std::size_t g = 0; g < partials.size() / io::kPosePartials; ++g) {
+      const float* p = &partials[g * io::kPosePartials];
+      for (int k = 0; k < 9; ++k) d_w(k / 3, k % 3) += p[k];
+      for (int k = 0; k < 3; ++k) d_t[k] += p[9 + k];
+    }
+    return pose_gradient_from(d_w, d_t, camera.T_cam_world.linear().cast<float>().cast<double>(),
+                              camera.T_cam_world.translation().cast<float>().cast<double>());
+  }
 
   ForwardResult forward(const GaussiansView& gaussians, const Camera& camera,
                         const RenderSettings& settings) override {
@@ -196,7 +244,7 @@ class VulkanRasterizer final : public Rasterizer {
     f.gaussians = gaussians;
     f.camera = camera;
     f.settings = settings;
-    render(*state, f);
+    render(*state, f, nullptr, true);
     f.backend_state = state;
     return f;
   }
@@ -207,32 +255,15 @@ class VulkanRasterizer final : public Rasterizer {
     std::shared_ptr<FrameState> state = state_of(forward);
     FrameState& s = *state;
     const std::size_t n = s.count, pixels = std::size_t(forward.width) * forward.height;
-    const int stride_k = sh_coeff_count(forward.gaussians.sh_degree);
-    // Reserve everything before recording (see device_sort.h).
     d_rgb_.reserve(pixels * 3 * 4);
     d_alpha_.reserve(pixels * 4);
     d_depth_.reserve(pixels * 4);
-    isect_grads_.reserve(std::size_t(s.intersections) * io::kGradSlots * 4);
-    d_params_.reserve(n * kParamFloats * 4);
-    d_sh_.reserve(n * stride_k * 3 * 4);
-    pose_partials_.reserve(std::size_t(groups_for(n)) * io::kPosePartials * 4);
     batch_.upload(d_rgb_, d_image.rgb.data(), d_image.rgb.size() * 4);
     batch_.upload(d_alpha_, d_image.alpha.data(), d_image.alpha.size() * 4);
     batch_.upload(d_depth_, d_image.depth.data(), d_image.depth.size() * 4);
-    batch_.fill_zero(isect_grads_, std::size_t(s.intersections) * io::kGradSlots * 4);
-    batch_.dispatch(
-        rasterize_backward_,
-        {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities, &s.colors,
-         &s.depths, &s.last, &s.transmittance, &d_rgb_, &d_alpha_, &d_depth_, &isect_grads_},
-        {uint32_t(!d_image.rgb.empty()), uint32_t(!d_image.alpha.empty()),
-         uint32_t(!d_image.depth.empty())},
-        s.tiles_x, s.tiles_y);
-    batch_.dispatch(
-        project_backward_,
-        {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh, &s.conics,
-         &s.opacities, &s.radii, &s.tile_counts, &s.first_instance, &s.sorted_position,
-         &isect_grads_, &d_params_, &d_sh_, &pose_partials_},
-        {}, groups_for(n));
+    record_backward(s, d_rgb_, d_alpha_, d_depth_,
+                    {uint32_t(!d_image.rgb.empty()), uint32_t(!d_image.alpha.empty()),
+                     uint32_t(!d_image.depth.empty())});
     std::vector<float> params, partials;
     BackwardResult out;
     GaussianGrads& d = out.d_gaussians;
@@ -252,16 +283,7 @@ class VulkanRasterizer final : public Rasterizer {
       for (int k = 0; k < 4; ++k) d.rotations[i * 4 + k] = p[6 + k];
       d.opacity_logits[i] = p[10];
     }
-    Eigen::Matrix3d d_w = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d d_t = Eigen::Vector3d::Zero();
-    for (std::size_t g = 0; g < partials.size() / io::kPosePartials; ++g) {
-      const float* p = &partials[g * io::kPosePartials];
-      for (int k = 0; k < 9; ++k) d_w(k / 3, k % 3) += p[k];
-      for (int k = 0; k < 3; ++k) d_t[k] += p[9 + k];
-    }
-    out.d_loss_d_pose = pose_gradient_from(
-        d_w, d_t, forward.camera.T_cam_world.linear().cast<float>().cast<double>(),
-        forward.camera.T_cam_world.translation().cast<float>().cast<double>());
+    out.d_loss_d_pose = pose_gradient(partials, forward.camera);
     return out;
   }
 
@@ -274,8 +296,8 @@ class VulkanRasterizer final : public Rasterizer {
     screen_jvp_.reserve(std::size_t(s.count) * io::kScreenValues * 6 * 4);
     jacobian_.reserve(values * 4);
     batch_.dispatch(project_pose_jvp_,
-                    {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh,
-                     &s.conics, &s.radii, &screen_jvp_},
+                    {&s.frame, s.map.means, s.map.log_scales, s.map.rotations,
+                     s.map.opacity_logits, s.map.sh, &s.conics, &s.radii, &screen_jvp_},
                     {}, groups_for(s.count));
     batch_.dispatch(rasterize_pose_jvp_,
                     {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities,
@@ -318,15 +340,45 @@ class VulkanRasterizer final : public Rasterizer {
     again.gaussians = forward.gaussians;
     again.camera = forward.camera;
     again.settings = forward.settings;
-    render(*state, again);
+    render(*state, again, nullptr, true);
     return state;
   }
 
-  void render(FrameState& s, ForwardResult& f) {
+  // Records rasterize and project backward of a rendered frame from image gradients already on
+  // the device; `used` says which of d_rgb, d_alpha, d_depth hold gradients (the others are 0).
+  void record_backward(FrameState& s, const Buffer& d_rgb, const Buffer& d_alpha,
+                       const Buffer& d_depth, std::initializer_list<uint32_t> used) {
+    const std::size_t n = s.count;
+    const int stride_k = sh_coeff_count(s.map.sh_degree);
+    // Reserve everything before recording (see device_sort.h).
+    isect_grads_.reserve(std::size_t(s.intersections) * io::kGradSlots * 4);
+    d_params_.reserve(n * kParamFloats * 4);
+    d_sh_.reserve(n * stride_k * 3 * 4);
+    pose_partials_.reserve(std::size_t(groups_for(n)) * io::kPosePartials * 4);
+    batch_.fill_zero(isect_grads_, std::size_t(s.intersections) * io::kGradSlots * 4);
+    batch_.dispatch(
+        rasterize_backward_,
+        {&s.frame, &s.tile_ranges, &s.sorted_ids, &s.means2d, &s.conics, &s.opacities, &s.colors,
+         &s.depths, &s.last, &s.transmittance, &d_rgb, &d_alpha, &d_depth, &isect_grads_},
+        used, s.tiles_x, s.tiles_y);
+    batch_.dispatch(
+        project_backward_,
+        {&s.frame, s.map.means, s.map.log_scales, s.map.rotations, s.map.opacity_logits, s.map.sh,
+         &s.conics, &s.opacities, &s.radii, &s.tile_counts, &s.first_instance, &s.sorted_position,
+         &isect_grads_, &d_params_, &d_sh_, &pose_partials_},
+        {}, groups_for(n));
+  }
+
+  // Renders f.gaussians, or the device map `resident` where given (f.gaussians then only gives
+  // the SH degree). With `finish`, downloads the images into f and runs the batch; otherwise the
+  // second submission stays recorded. A resident render reports no cull statistics: they are
+  // one word per Gaussian.
+  void render(FrameState& s, ForwardResult& f, const DeviceMap* resident, bool finish) {
     const GaussiansView& g = f.gaussians;
     const Camera& camera = f.camera;
-    const std::size_t n = g.size();
-    const io::FrameParams params = make_params(camera, f.settings, g.sh_degree, n);
+    const std::size_t n = resident ? resident->count : g.size();
+    const int sh_degree = resident ? resident->sh_degree : g.sh_degree;
+    const io::FrameParams params = make_params(camera, f.settings, sh_degree, n);
     s.count = uint32_t(n);
     s.tiles_x = params.tiles_x;
     s.tiles_y = params.tiles_y;
@@ -348,14 +400,19 @@ class VulkanRasterizer final : public Rasterizer {
     sort_.prepare(uint32_t(n));
     scan_.prepare(uint32_t(n));
     batch_.upload(s.frame, &params, sizeof(params));
-    reserve_upload(batch_, s.means, g.means);
-    reserve_upload(batch_, s.log_scales, g.log_scales);
-    reserve_upload(batch_, s.rotations, g.rotations);
-    reserve_upload(batch_, s.opacity_logits, g.opacity_logits);
-    reserve_upload(batch_, s.sh, g.sh);
+    if (resident) {
+      s.map = *resident;
+    } else {
+      reserve_upload(batch_, s.means, g.means);
+      reserve_upload(batch_, s.log_scales, g.log_scales);
+      reserve_upload(batch_, s.rotations, g.rotations);
+      reserve_upload(batch_, s.opacity_logits, g.opacity_logits);
+      reserve_upload(batch_, s.sh, g.sh);
+      s.map = {&s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh, uint32_t(n), sh_degree};
+    }
     batch_.dispatch(project_forward_,
-                    {&s.frame, &s.means, &s.log_scales, &s.rotations, &s.opacity_logits, &s.sh,
-                     &s.means2d, &s.conics, &s.depths, &s.radii, &s.colors, &s.opacities,
+                    {&s.frame, s.map.means, s.map.log_scales, s.map.rotations, s.map.opacity_logits,
+                     s.map.sh, &s.means2d, &s.conics, &s.depths, &s.radii, &s.colors, &s.opacities,
                      &s.tile_counts, &s.depth_keys, &s.depth_order, &s.cull},
                     {}, groups_for(n));
     const bool depth_in_tmp = sort_.record(batch_, s.depth_keys, s.depth_order, s.depth_keys_tmp,
@@ -405,6 +462,8 @@ class VulkanRasterizer final : public Rasterizer {
     f.height = camera.height;
     f.tiles_x = int(s.tiles_x);
     f.tiles_y = int(s.tiles_y);
+    f.stats.intersections = m;
+    if (!finish) return;
     download_into(batch_, s.rgb, f.rgb, pixels * 3);
     download_into(batch_, s.alpha, f.alpha, pixels);
     download_into(batch_, s.depth, f.depth, pixels);
@@ -422,10 +481,10 @@ class VulkanRasterizer final : public Rasterizer {
       download_into(batch_, s.sorted_ids, f.sorted_ids, m);
     }
     std::vector<uint32_t> cull;
-    download_into(batch_, s.cull, cull, n);
+    if (!resident) download_into(batch_, s.cull, cull, n);
     batch_.run();
 
-    f.stats = tally_cull_reasons(cull);
+    if (!resident) f.stats = tally_cull_reasons(cull);
     f.stats.intersections = m;
   }
 

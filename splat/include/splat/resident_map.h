@@ -1,0 +1,83 @@
+// A map kept where a backend computes (device memory for Vulkan), with its Adam state and the
+// frames it is fitted to, optimized one mapping step at a time: during optimization neither the
+// map nor its gradients cross the bus, only a few scalars per step (the loss, the pose and
+// vignetting gradients). Whole-map transfers happen when the host asks for the map.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "splat/adam.h"
+#include "splat/camera.h"
+#include "splat/gaussians.h"
+#include "splat/rasterizer.h"
+#include "splat/rgbd_frame.h"
+
+namespace splat {
+
+// The mapping loss, as the CPU composes it from losses.h: color_weight x l1_loss plus
+// ssim_weight x dssim_loss of the colour the camera records (the render times the vignetting
+// gain 1 + k1 r^2 + k2 r^4, r^2 = ((x + 0.5 - cx) / fx)^2 + ((y + 0.5 - cy) / fy)^2), plus
+// depth_weight x silhouette_depth_l1_loss. Ignored pixels of the target take the recorded
+// render as their colour and have no depth measurement: they pull nowhere.
+struct MappingLoss {
+  double color_weight = 0.5, ssim_weight = 0.1, depth_weight = 1.0;
+  double depth_alpha_threshold = 0.95;
+  double vignetting_k1 = 0, vignetting_k2 = 0;
+};
+
+// Adam's learning rates per parameter group (times lr_scale in a step) and its constants.
+struct AdamRates {
+  double means = 0, log_scales = 0, rotations = 0, opacity_logits = 0;
+  double sh_dc = 0, sh_rest = 0;  // SH coefficient 0, and the higher degrees
+  AdamHyper hyper;
+};
+
+// Adam's state per Gaussian, aligned with the map: the moments field for field, and the step
+// count of each Gaussian (Gaussians added later get their own bias correction).
+struct AdamMoments {
+  Gaussians m, v;
+  std::vector<uint32_t> steps;
+};
+
+struct MappingStepResult {
+  double loss = 0;
+  PoseGradient d_loss_d_pose = PoseGradient::Zero();
+  std::array<double, 2> d_loss_d_vignetting = {0, 0};  // k1, k2
+};
+
+class ResidentMap {
+ public:
+  virtual ~ResidentMap() = default;
+  virtual std::size_t size() const = 0;
+  virtual int sh_degree() const = 0;
+
+  // Replaces the map and its Adam state; null moments start from zero.
+  virtual void assign(const Gaussians& map, const AdamMoments* moments) = 0;
+  // Appends Gaussians (of the map's SH degree) with zero moments and step counts.
+  virtual void append(const GaussiansView& added) = 0;
+  // Keeps the Gaussians where keep[i] != 0, in order.
+  virtual void keep(std::span<const uint8_t> keep) = 0;
+  // The map, and its Adam state where `moments` is given: a whole-map transfer.
+  virtual void read(Gaussians& map, AdamMoments* moments) = 0;
+  // One parameter group, [N, width]: what pruning and the free-space test need of the map.
+  virtual std::vector<float> read_group(ParamGroup group) = 0;
+
+  // Stores a frame to fit under `key` (its colour, depth and ignore mask), replacing any frame
+  // stored under it; the frame's camera gives the image size. Frames stay until dropped.
+  virtual void set_target(uint64_t key, const RgbdFrame& frame) = 0;
+  virtual void drop_target(uint64_t key) = 0;
+  virtual bool has_target(uint64_t key) const = 0;
+
+  // Renders the map: images only (ForwardResult's intermediates stay empty).
+  virtual ForwardResult render(const Camera& camera, const RenderSettings& settings) = 0;
+  // One step: render at `camera` (the target's size), the loss against target `key`, its
+  // gradients, and Adam on every Gaussian at rates x lr_scale. `isotropic` moves the three log
+  // scales of a Gaussian together and leaves rotations. Throws splat::Error for an unknown key,
+  // a camera of another size or an empty map.
+  virtual MappingStepResult step(uint64_t key, const Camera& camera, const MappingLoss& loss,
+                                 const AdamRates& rates, double lr_scale, bool isotropic) = 0;
+};
+
+}  // namespace splat

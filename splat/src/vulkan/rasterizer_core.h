@@ -1,0 +1,64 @@
+// What the resident map (resident_map.cpp) needs of the Vulkan rasterizer: its device, its
+// command batch, and its forward and backward stages recorded on a map that stays on the device.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "splat/rasterizer.h"
+#include "splat/resident_map.h"
+#include "vulkan/compute.h"
+#include "vulkan/device_sort.h"
+
+namespace splat::vk {
+
+// A map's five parameter arrays on the device (frame.glsl's bindings 1..5).
+struct DeviceMap {
+  const Buffer* means = nullptr;
+  const Buffer* log_scales = nullptr;
+  const Buffer* rotations = nullptr;
+  const Buffer* opacity_logits = nullptr;
+  const Buffer* sh = nullptr;
+  uint32_t count = 0;
+  int sh_degree = 0;
+};
+
+class RasterizerCore {
+ public:
+  virtual ~RasterizerCore() = default;
+  virtual Context& context() = 0;
+  // The batch every stage records into; use it only while holding lock().
+  virtual CommandBatch& batch() = 0;
+  virtual std::unique_lock<std::mutex> lock() = 0;
+  virtual PrefixSum& prefix_sum() = 0;
+
+  // Renders the device map (caller holds lock()). With `images`, downloads the images into it
+  // and runs the batch; without, leaves the last submission recorded for the caller to extend
+  // and run. Returns the frame's device state, for images() and record_backward().
+  virtual std::shared_ptr<void> render(const DeviceMap& map, const Camera& camera,
+                                       const RenderSettings& settings, ForwardResult* images) = 0;
+  struct Images {
+    const Buffer* rgb = nullptr;    // [H, W, 3]
+    const Buffer* alpha = nullptr;  // [H, W]
+    const Buffer* depth = nullptr;  // [H, W], alpha-weighted
+  };
+  virtual Images images(const std::shared_ptr<void>& frame) = 0;
+  // Records the backward pass from image gradients on the device and the download of its pose
+  // partials into `pose_partials`. Returns the gradients: [N, kGeometryFloats] and [N, K, 3].
+  struct Gradients {
+    const Buffer* geometry = nullptr;
+    const Buffer* sh = nullptr;
+  };
+  virtual Gradients record_backward(const std::shared_ptr<void>& frame, const Buffer& d_rgb,
+                                    const Buffer& d_alpha, const Buffer& d_depth,
+                                    std::vector<float>& pose_partials) = 0;
+  // dL/d(pose) of the frame's camera from its downloaded pose partials.
+  virtual PoseGradient pose_gradient(const std::vector<float>& pose_partials,
+                                     const Camera& camera) const = 0;
+};
+
+// The resident map of a Vulkan rasterizer, which must outlive it.
+std::unique_ptr<ResidentMap> make_resident_map(RasterizerCore& core, int sh_degree);
+
+}  // namespace splat::vk

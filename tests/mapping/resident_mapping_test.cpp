@@ -1,0 +1,88 @@
+// The same Mapper on the Vulkan backend's resident map (lavapipe in CI) and on the CPU backend's
+// host loop, the reference: keyframes, a densifying sweep and pruning give the same map (its
+// renders of views it was not fitted to) and the same keyframe poses.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "datasets/dataset.h"
+#include "datasets/synthetic_sequence.h"
+#include "mapping/mapper.h"
+#include "splat/losses.h"
+#include "splat/rasterizer.h"
+#include "support/backends.h"
+#include "support/synthetic_dataset.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+TEST(ResidentMapping, GivesTheCpuBackendsMapAndPoses) {
+  GSLAM_REQUIRE_BACKEND(vulkan, "vulkan");
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 25;
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  auto cpu = splat::make_cpu_rasterizer();
+  mapping::MapperConfig config;
+  config.iterations = 10;
+  // Poses move with the map, so the comparison covers the pose gradient too.
+  config.pose_learning_rate = 2e-4;
+  config.pose_rotation_learning_rate = 5e-5;
+  mapping::Mapper reference(*cpu, config), device(vulkan, config);
+  ASSERT_FALSE(reference.device_resident());
+  ASSERT_TRUE(device.device_resident());
+  auto truth = [&](std::size_t i) { return dataset.entries[i].T_world_cam_truth->inverse(); };
+
+  vulkan.reset_transfers();
+  int iterations = 0;
+  for (std::size_t i = 0; i < 25; i += 4) {
+    const splat::RgbdFrame frame = dataset.load(i);
+    const mapping::MappingStats a = reference.add_keyframe(frame, truth(i));
+    const mapping::MappingStats b = device.add_keyframe(frame, truth(i));
+    iterations += b.iterations;
+    EXPECT_EQ(a.window, b.window) << "keyframe " << i;
+  }
+  const splat::Rasterizer::Transfers moved = vulkan.transfers();
+  // The final refinement's path: frames outside the keyframes, densified, with the vignetting
+  // learnt (refine_vignetting_rate), then pruning.
+  for (std::size_t i : {2u, 10u, 18u}) {
+    for (mapping::Mapper* m : {&reference, &device}) {
+      Eigen::Isometry3d T_cam_world = truth(i);
+      m->refine(m->refinement_frame(dataset.load(i)), T_cam_world, nullptr, 3, true);
+    }
+  }
+  reference.prune();
+  device.prune();
+
+  const std::size_t map_bytes = device.size() * (3 + 3 + 4 + 1 + 3) * 4;
+  std::printf("resident mapping: %d steps over 7 keyframes moved %.1f KiB up, %.1f KiB down; final map %zu vs %zu "
+              "Gaussians (%.1f KiB on the device)\n",
+              iterations, double(moved.to_device) / 1024, double(moved.to_host) / 1024, device.size(), reference.size(),
+              double(map_bytes) / 1024);
+  EXPECT_NEAR(double(device.size()), double(reference.size()), 0.03 * double(reference.size()));
+
+  const auto poses = reference.keyframe_poses(), device_poses = device.keyframe_poses();
+  ASSERT_EQ(poses.size(), device_poses.size());
+  double moved_most = 0;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const Eigen::Isometry3d& a = poses[k].second;
+    const Eigen::Isometry3d& b = device_poses[k].second;
+    moved_most = std::max(moved_most, (a.inverse().translation() - truth(4 * poses[k].first).inverse().translation()).norm());
+    EXPECT_LT((a.inverse().translation() - b.inverse().translation()).norm(), 1e-3) << "keyframe " << poses[k].first;
+    EXPECT_LT(Eigen::AngleAxisd((a.linear() * b.linear().transpose()).eval()).angle(), 1e-3) << "keyframe " << poses[k].first;
+  }
+  EXPECT_GT(moved_most, 1e-4) << "the poses moved, so their agreement says something";
+  EXPECT_NEAR(device.vignetting().k1, reference.vignetting().k1, 0.1 * std::abs(reference.vignetting().k1) + 1e-4);
+
+  // Views the map was not fitted to, rendered by the same backend from both maps.
+  for (std::size_t i : {1u, 13u, 23u}) {
+    const splat::RgbdFrame frame = splat::downsample(dataset.load(i), 2);
+    const splat::Camera camera = splat::posed(frame.camera, truth(i));
+    const double a = splat::psnr(cpu->forward(reference.map(), camera, splat::images_only()).rgb, frame.rgb, 3);
+    const double b = splat::psnr(cpu->forward(device.map(), camera, splat::images_only()).rgb, frame.rgb, 3);
+    std::printf("frame %zu: %.3f dB from the CPU backend's map, %.3f dB from the resident map\n", i, a, b);
+    EXPECT_NEAR(b, a, 0.1) << "frame " << i;
+  }
+}
+
+}  // namespace

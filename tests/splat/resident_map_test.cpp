@@ -1,0 +1,208 @@
+// The Vulkan backend's resident map (runs on lavapipe in CI): its bookkeeping against the host
+// copy it was given, one mapping step against the same step done on the host (the backend's
+// own forward and backward, the CPU losses, Adam), and what crosses the bus per step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numeric>
+
+#include "splat/adam.h"
+#include "splat/error.h"
+#include "splat/losses.h"
+#include "splat/resident_map.h"
+#include "support/backends.h"
+#include "support/random_scene.h"
+
+namespace {
+
+using gslam::test::SceneOptions;
+
+gslam::test::Scene<float> scene(int count, int width, int height, uint32_t seed) {
+  SceneOptions o;
+  o.seed = seed;
+  o.count = count;
+  o.sh_degree = 1;
+  o.width = width;
+  o.height = height;
+  o.min_scale = 0.02;
+  o.max_scale = 0.08;
+  return gslam::test::make_random_scene<float>(o);
+}
+
+// A frame to fit: another random scene rendered at the same camera, with depth holes.
+splat::RgbdFrame target_frame(splat::Rasterizer& rasterizer, const splat::Camera& camera, int count) {
+  const gslam::test::Scene<float> other = scene(count, camera.width, camera.height, 99);
+  const splat::ForwardResult render = rasterizer.forward(other.gaussians, camera, splat::images_only());
+  splat::RgbdFrame f;
+  f.camera = camera;
+  f.rgb = render.rgb;
+  f.depth = render.depth_normalized;
+  for (std::size_t p = 0; p < f.depth.size(); p += 7) f.depth[p] = 0;
+  return f;
+}
+
+std::size_t map_bytes(const splat::Gaussians& g) {
+  return (g.means.size() + g.log_scales.size() + g.rotations.size() + g.opacity_logits.size() + g.sh.size()) * 4;
+}
+
+#define GSLAM_REQUIRE_RESIDENT(var, rasterizer, degree)               \
+  GSLAM_REQUIRE_BACKEND(rasterizer, "vulkan");                        \
+  std::unique_ptr<splat::ResidentMap> var = rasterizer.make_resident_map(degree); \
+  ASSERT_TRUE(var) << "the Vulkan backend keeps maps on the device"
+
+TEST(ResidentMap, KeepsWhatItIsGivenThroughAppendsAndPruning) {
+  GSLAM_REQUIRE_RESIDENT(device, rasterizer, 1);
+  const gslam::test::Scene<float> a = scene(300, 64, 48, 1), b = scene(200, 64, 48, 2);
+  device->assign(a.gaussians, nullptr);
+  device->append(b.gaussians);
+  ASSERT_EQ(device->size(), 500u);
+  // Keep every third Gaussian, across the boundary between the two.
+  std::vector<uint8_t> keep(500, 0);
+  splat::Gaussians expected;
+  expected.sh_degree = 1;
+  for (std::size_t i = 0; i < 500; i += 3) {
+    keep[i] = 1;
+    const splat::Gaussians& from = i < 300 ? a.gaussians : b.gaussians;
+    const std::size_t j = i < 300 ? i : i - 300;
+    const std::size_t k = expected.size();
+    expected.resize(k + 1);
+    for (splat::ParamGroup group : splat::kAllParamGroups) {
+      const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, 1));
+      for (std::size_t c = 0; c < width; ++c) splat::param_group(expected, group)[k * width + c] = splat::param_group(from, group)[j * width + c];
+    }
+  }
+  device->keep(keep);
+  splat::Gaussians read;
+  splat::AdamMoments moments;
+  device->read(read, &moments);
+  ASSERT_EQ(read.size(), expected.size());
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    EXPECT_EQ(splat::param_group(read, group), splat::param_group(expected, group)) << splat::param_group_name(group);
+    EXPECT_EQ(device->read_group(group), splat::param_group(expected, group)) << splat::param_group_name(group);
+    for (float m : splat::param_group(moments.m, group)) ASSERT_EQ(m, 0.f) << "appended Gaussians start with zero moments";
+  }
+  EXPECT_EQ(moments.steps, std::vector<uint32_t>(expected.size(), 0u));
+  EXPECT_THROW(device->keep(std::vector<uint8_t>(3, 1)), splat::Error) << "one flag per Gaussian";
+  SceneOptions degree0;
+  degree0.sh_degree = 0;
+  EXPECT_THROW(device->append(gslam::test::make_random_scene<float>(degree0).gaussians), splat::Error)
+      << "SH degree 0 into a degree-1 map";
+}
+
+TEST(ResidentMap, RefusesUnknownTargetsWrongSizesAndAnEmptyMap) {
+  GSLAM_REQUIRE_RESIDENT(device, rasterizer, 1);
+  const gslam::test::Scene<float> s = scene(50, 64, 48, 4);
+  const splat::MappingLoss loss;
+  const splat::AdamRates rates;
+  EXPECT_THROW(device->step(0, s.camera, loss, rates, 1, false), splat::Error) << "empty map";
+  device->assign(s.gaussians, nullptr);
+  EXPECT_THROW(device->step(7, s.camera, loss, rates, 1, false), splat::Error) << "no target 7";
+  splat::RgbdFrame frame = target_frame(rasterizer, s.camera, 50);
+  device->set_target(7, frame);
+  EXPECT_TRUE(device->has_target(7));
+  splat::Camera larger = s.camera;
+  larger.width = 80;
+  EXPECT_THROW(device->step(7, larger, loss, rates, 1, false), splat::Error) << "camera of another size";
+  frame.depth.pop_back();
+  EXPECT_THROW(device->set_target(8, frame), splat::Error) << "depth of the wrong size";
+  device->drop_target(7);
+  EXPECT_FALSE(device->has_target(7));
+}
+
+// The step on the device against the same step on the host: the backend's forward and
+// backward of the host's map, the CPU losses and splat::adam_update.
+TEST(ResidentMap, StepMatchesTheHostLoopAndMovesOnlyScalars) {
+  GSLAM_REQUIRE_RESIDENT(device, rasterizer, 1);
+  const gslam::test::Scene<float> s = scene(3000, 64, 48, 5);
+  splat::RgbdFrame frame = target_frame(rasterizer, s.camera, 400);
+  frame.ignore.assign(frame.depth.size(), 0);
+  for (std::size_t p = 0; p < frame.ignore.size(); p += 11) frame.ignore[p] = 1;
+  splat::MappingLoss loss;
+  loss.vignetting_k1 = 0.05;
+  loss.vignetting_k2 = -0.02;
+  splat::AdamRates rates;
+  rates.means = 1e-3, rates.log_scales = 5e-3, rates.rotations = 1e-3, rates.opacity_logits = 5e-2;
+  rates.sh_dc = 2.5e-3, rates.sh_rest = 1.25e-4;
+  const double lr_scale = 0.5;
+
+  // The host step.
+  splat::Gaussians host = s.gaussians;
+  const splat::ForwardResult render = rasterizer.forward(host, s.camera, splat::images_only());
+  const std::size_t pixels = frame.depth.size();
+  std::vector<float> recorded = render.rgb, gain(pixels);
+  for (int y = 0; y < s.camera.height; ++y) {
+    for (int x = 0; x < s.camera.width; ++x) {
+      const double u = (x + 0.5 - s.camera.cx) / s.camera.fx, v = (y + 0.5 - s.camera.cy) / s.camera.fy, r2 = u * u + v * v;
+      const std::size_t p = std::size_t(y) * s.camera.width + x;
+      gain[p] = float(1 + r2 * (loss.vignetting_k1 + r2 * loss.vignetting_k2));
+      for (int c = 0; c < 3; ++c) recorded[p * 3 + c] *= gain[p];
+    }
+  }
+  std::vector<float> target_rgb = frame.rgb, target_depth = frame.depth;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    if (!frame.ignore[p]) continue;
+    for (int c = 0; c < 3; ++c) target_rgb[p * 3 + c] = recorded[p * 3 + c];
+    target_depth[p] = 0;
+  }
+  splat::ImageGrads d;
+  d.rgb.assign(pixels * 3, 0.f);
+  d.alpha.assign(pixels, 0.f);
+  d.depth.assign(pixels, 0.f);
+  double host_loss = splat::l1_loss<float>(recorded, target_rgb, 3, {}, d.rgb, loss.color_weight);
+  host_loss += splat::dssim_loss<float>(recorded, target_rgb, s.camera.width, s.camera.height, 3, d.rgb, loss.ssim_weight);
+  for (std::size_t p = 0; p < pixels; ++p)
+    for (int c = 0; c < 3; ++c) d.rgb[p * 3 + c] *= gain[p];
+  host_loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, target_depth, loss.depth_alpha_threshold,
+                                                      d.depth, d.alpha, loss.depth_weight);
+  const splat::BackwardResult grads = rasterizer.backward(render, d);
+  const double rate[] = {rates.means, rates.log_scales, rates.rotations, rates.opacity_logits};
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    std::vector<float>& p = splat::param_group(host, group);
+    const std::vector<float>& g = splat::param_group(grads.d_gaussians, group);
+    const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, 1));
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      float m = 0, v = 0;
+      const double lr = group == splat::ParamGroup::kSh ? (k % width < 3 ? rates.sh_dc : rates.sh_rest)
+                                                         : rate[static_cast<int>(group)];
+      splat::adam_update(p[k], g[k], m, v, lr * lr_scale, 1 - rates.hyper.beta1, 1 - rates.hyper.beta2, rates.hyper);
+    }
+  }
+
+  // The device step.
+  device->assign(s.gaussians, nullptr);
+  device->set_target(3, frame);
+  rasterizer.reset_transfers();
+  const splat::MappingStepResult step = device->step(3, s.camera, loss, rates, lr_scale, false);
+  const splat::Rasterizer::Transfers moved = rasterizer.transfers();
+  EXPECT_NEAR(step.loss, host_loss, 1e-5 * host_loss);
+  EXPECT_LT((step.d_loss_d_pose - grads.d_loss_d_pose).norm(), 1e-3 * grads.d_loss_d_pose.norm() + 1e-6);
+  splat::Gaussians stepped;
+  device->read(stepped, nullptr);
+  // Adam's first step moves a parameter by about its rate, whatever the gradient's size: a step
+  // whose gradient differs only by float rounding may still flip a tiny gradient's sign. So:
+  // nearly every value agrees to 1% of its rate, and none is off by more than twice its rate.
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    const std::vector<float>& want = splat::param_group(host, group);
+    const std::vector<float>& got = splat::param_group(stepped, group);
+    const std::vector<float>& before = splat::param_group(s.gaussians, group);
+    std::size_t agree = 0, moved_values = 0;
+    for (std::size_t k = 0; k < want.size(); ++k) {
+      const double step_size = std::abs(double(want[k]) - before[k]);
+      moved_values += step_size > 0;
+      ASSERT_LE(std::abs(double(got[k]) - want[k]), 2.01 * std::max(step_size, 1e-7) + 1e-6)
+          << splat::param_group_name(group) << " value " << k;
+      agree += std::abs(double(got[k]) - want[k]) <= 0.01 * step_size + 1e-6;
+    }
+    EXPECT_GT(moved_values, want.size() / 4) << splat::param_group_name(group) << ": the step moved the map";
+    EXPECT_GE(double(agree), 0.99 * double(want.size())) << splat::param_group_name(group);
+  }
+  // Per step: the frame's parameters, the intersection count, Adam's constants and the partial
+  // sums of the loss and the pose gradient; nothing map- or image-sized.
+  const std::size_t bytes = moved.to_device + moved.to_host;
+  std::printf("resident step: %zu bytes up, %zu down; the map is %zu bytes\n", moved.to_device, moved.to_host,
+              map_bytes(s.gaussians));
+  EXPECT_LE(double(bytes), 0.01 * double(map_bytes(s.gaussians)));
+}
+
+}  // namespace
