@@ -1,7 +1,7 @@
 // The mapping loss on the device: pointwise terms -> (D-SSIM: blur the statistics along rows,
 // then columns -> SSIM terms -> blur their gradients back) -> gradient through the vignetting.
 // Every stage writes its per-workgroup partial sums into one [groups, kLossPartials] buffer of
-// doubles, downloaded with the batch and added on the host in a fixed order.
+// doubles, added on the device in a fixed order (partials_sum.comp): kLossPartials values come back.
 #include "vulkan/mapping_loss.h"
 
 #include <cmath>
@@ -12,6 +12,7 @@
 #include "loss_finish_spv.h"
 #include "loss_pointwise_spv.h"
 #include "loss_ssim_spv.h"
+#include "partials_sum_spv.h"
 #include "shader_io.h"
 #include "splat/error.h"
 
@@ -46,17 +47,19 @@ struct MappingLossKernels::Impl {
         blur(c, kLossBlurSpv, 3, "loss_blur"),
         ssim(c, kLossSsimSpv, 4, "loss_ssim"),
         finish(c, kLossFinishSpv, 7, "loss_finish"),
+        sum(c, kPartialsSumSpv, 2, "partials_sum"),
         params(c),
         planes{Buffer(c), Buffer(c), Buffer(c)},
-        partials(c) {}
+        partials(c),
+        sums(c) {}
 
-  Kernel pointwise, blur, ssim, finish;
+  Kernel pointwise, blur, ssim, finish, sum;
   Buffer params;
   // D-SSIM scratch, [3 * kSsimStats, H, W] each: the statistics (later the SSIM gradient), the
   // row-blurred planes, and the fully blurred planes.
   Buffer planes[3];
-  Buffer partials;
-  std::vector<double> host_partials;  // [groups, kLossPartials], filled by the batch's run()
+  Buffer partials, sums;
+  double host_sums[io::kLossPartials] = {};  // filled by the batch's run()
   // What result() weighs the partial sums with, from the last record().
   double color_scale = 0, depth_scale = 0, ssim_scale = 0;
   bool ssim_on = false;
@@ -119,7 +122,7 @@ void MappingLossKernels::record(CommandBatch& batch, const LossBuffers& buffers,
   const std::size_t plane_bytes = s.ssim_on ? pixels * 3 * io::kSsimStats * 4 : 4;
   for (Buffer& b : s.planes) b.reserve(plane_bytes);
   s.partials.reserve(groups * io::kLossPartials * sizeof(double));
-  s.host_partials.assign(groups * io::kLossPartials, 0.0);
+  s.sums.reserve(io::kLossPartials * sizeof(double));
   batch.upload(s.params, &p, sizeof(p));
 
   // Unused bindings still need a buffer: the ignore mask's stand-in is never read.
@@ -143,18 +146,13 @@ void MappingLossKernels::record(CommandBatch& batch, const LossBuffers& buffers,
                  {&s.params, buffers.rgb, buffers.target_rgb, ignore, &s.planes[2], buffers.d_rgb,
                   &s.partials},
                  {}, g);
-  batch.download(s.partials, s.host_partials.data(), s.host_partials.size() * sizeof(double));
+  batch.dispatch(s.sum, {&s.partials, &s.sums}, {g, io::kLossPartials}, 1);
+  batch.download(s.sums, s.host_sums, sizeof(s.host_sums));
 }
 
 MappingLossKernels::Result MappingLossKernels::result() const {
   const Impl& s = *impl_;
-  double sums[io::kLossPartials] = {};
-  const std::size_t groups = s.host_partials.size() / io::kLossPartials;
-  for (std::size_t g = 0; g < groups; ++g) {
-    for (std::size_t k = 0; k < io::kLossPartials; ++k) {
-      sums[k] += s.host_partials[g * io::kLossPartials + k];
-    }
-  }
+  const double* sums = s.host_sums;
   Result r;
   // weight x (1 - mean SSIM) = weight / (3 W H) x sum of (1 - SSIM).
   r.loss = s.color_scale * sums[io::kLossColorL1] + s.depth_scale * sums[io::kLossDepthL1] +

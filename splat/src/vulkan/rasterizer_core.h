@@ -44,18 +44,18 @@ class RasterizerCore {
     const Buffer* depth = nullptr;  // [H, W], alpha-weighted
   };
   virtual Images images(const std::shared_ptr<void>& frame) = 0;
-  // Records the backward pass from image gradients on the device and the download of its pose
-  // partials into `pose_partials`. Returns the gradients: [N, kGeometryFloats] and [N, K, 3].
+  // Records the backward pass from image gradients on the device and the download of the sums
+  // of its pose partials (dL/dW row-major, dL/dt: kPosePartials values) into `pose_sums`, which
+  // must stay valid until the batch runs. Returns the gradients: [N, kGeometryFloats], [N, K, 3].
   struct Gradients {
     const Buffer* geometry = nullptr;
     const Buffer* sh = nullptr;
   };
   virtual Gradients record_backward(const std::shared_ptr<void>& frame, const Buffer& d_rgb,
                                     const Buffer& d_alpha, const Buffer& d_depth,
-                                    std::vector<float>& pose_partials) = 0;
-  // dL/d(pose) of the frame's camera from its downloaded pose partials.
-  virtual PoseGradient pose_gradient(const std::vector<float>& pose_partials,
-                                     const Camera& camera) const = 0;
+                                    double* pose_sums) = 0;
+  // dL/d(pose) of the frame's camera from its pose sums.
+  virtual PoseGradient pose_gradient(const double* pose_sums, const Camera& camera) const = 0;
 };
 
 // The resident map of a Vulkan rasterizer, which must outlive it.

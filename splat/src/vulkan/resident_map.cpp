@@ -220,7 +220,7 @@ class VulkanResidentMap final : public ResidentMap {
                  {images.rgb, images.alpha, images.depth, &t.rgb, &t.depth, t.ignoring ? &t.ignore : nullptr, &d_rgb_,
                   &d_alpha_, &d_depth_},
                  camera, loss, t.measured);
-    const RasterizerCore::Gradients grads = core_.record_backward(frame, d_rgb_, d_alpha_, d_depth_, pose_partials_);
+    const RasterizerCore::Gradients grads = core_.record_backward(frame, d_rgb_, d_alpha_, d_depth_, pose_sums_);
     io::AdamParams p{};
     p.lr_means = float(rates.means * lr_scale);
     p.lr_log_scales = float(rates.log_scales * lr_scale);
@@ -245,7 +245,7 @@ class VulkanResidentMap final : public ResidentMap {
     MappingStepResult out;
     out.loss = value.loss;
     out.d_loss_d_vignetting = value.d_vignetting;
-    out.d_loss_d_pose = core_.pose_gradient(pose_partials_, camera);
+    out.d_loss_d_pose = core_.pose_gradient(pose_sums_, camera);
     return out;
   }
 
@@ -353,7 +353,7 @@ class VulkanResidentMap final : public ResidentMap {
   std::vector<Buffer> arrays_;  // indexed by Array
   Buffer adam_params_, keep_bits_, offsets_;
   Buffer d_rgb_, d_alpha_, d_depth_;
-  std::vector<float> pose_partials_;
+  double pose_sums_[io::kPosePartials] = {};
   std::map<uint64_t, Target> targets_;
 };
 

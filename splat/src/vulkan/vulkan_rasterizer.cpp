@@ -13,6 +13,7 @@
 #include "heap_tuning.h"
 #include "project_backward_spv.h"
 #include "project_forward_spv.h"
+#include "partials_sum_float_spv.h"
 #include "project_pose_jvp_spv.h"
 #include "rasterize_backward_atomic_spv.h"
 #include "rasterize_backward_spv.h"
@@ -166,6 +167,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
         project_backward_(*context_, kProjectBackwardSpv, 16, "project_backward"),
         project_pose_jvp_(*context_, kProjectPoseJvpSpv, 9, "project_pose_jvp"),
         rasterize_pose_jvp_(*context_, kRasterizePoseJvpSpv, 11, "rasterize_pose_jvp"),
+        partials_sum_(*context_, kPartialsSumFloatSpv, 2, "partials_sum"),
         d_rgb_(*context_),
         d_alpha_(*context_),
         d_depth_(*context_),
@@ -173,6 +175,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
         d_params_(*context_),
         d_sh_(*context_),
         pose_partials_(*context_),
+        pose_sums_(*context_),
         screen_jvp_(*context_),
         jacobian_(*context_) {}
 
@@ -215,21 +218,18 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
   }
   Gradients record_backward(const std::shared_ptr<void>& frame, const Buffer& d_rgb,
                             const Buffer& d_alpha, const Buffer& d_depth,
-                            std::vector<float>& pose_partials) override {
+                            double* pose_sums) override {
     FrameState& s = *std::static_pointer_cast<FrameState>(frame);
+    pose_sums_.reserve(io::kPosePartials * sizeof(double));
     record_backward(s, d_rgb, d_alpha, d_depth, {1u, 1u, 1u});
-    download_into(batch_, pose_partials_, pose_partials,
-                  std::size_t(groups_for(s.count)) * io::kPosePartials);
+    batch_.dispatch(partials_sum_, {&pose_partials_, &pose_sums_}, {groups_for(s.count), io::kPosePartials}, 1);
+    batch_.download(pose_sums_, pose_sums, io::kPosePartials * sizeof(double));
     return {&d_params_, &d_sh_};
   }
-  PoseGradient pose_gradient(const std::vector<float>& partials, const Camera& camera) const override {
-    Eigen::Matrix3d d_w = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d d_t = Eigen::Vector3d::Zero();
-    for (std::size_t g = 0; g < partials.size() / io::kPosePartials; ++g) {
-      const float* p = &partials[g * io::kPosePartials];
-      for (int k = 0; k < 9; ++k) d_w(k / 3, k % 3) += p[k];
-      for (int k = 0; k < 3; ++k) d_t[k] += p[9 + k];
-    }
+  PoseGradient pose_gradient(const double* sums, const Camera& camera) const override {
+    Eigen::Matrix3d d_w;
+    for (int k = 0; k < 9; ++k) d_w(k / 3, k % 3) = sums[k];
+    const Eigen::Vector3d d_t(sums[9], sums[10], sums[11]);
     return pose_gradient_from(d_w, d_t, camera.T_cam_world.linear().cast<float>().cast<double>(),
                               camera.T_cam_world.translation().cast<float>().cast<double>());
   }
@@ -283,7 +283,11 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
       for (int k = 0; k < 4; ++k) d.rotations[i * 4 + k] = p[6 + k];
       d.opacity_logits[i] = p[10];
     }
-    out.d_loss_d_pose = pose_gradient(partials, forward.camera);
+    double sums[io::kPosePartials] = {};
+    for (std::size_t g = 0; g < partials.size() / io::kPosePartials; ++g) {
+      for (std::size_t k = 0; k < io::kPosePartials; ++k) sums[k] += partials[g * io::kPosePartials + k];
+    }
+    out.d_loss_d_pose = pose_gradient(sums, forward.camera);
     return out;
   }
 
@@ -495,8 +499,8 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
   PrefixSum scan_;
   RadixSort sort_;
   Kernel project_forward_, tiles_count_, tiles_emit_, tiles_finish_, rasterize_forward_,
-      rasterize_backward_, project_backward_, project_pose_jvp_, rasterize_pose_jvp_;
-  Buffer d_rgb_, d_alpha_, d_depth_, isect_grads_, d_params_, d_sh_, pose_partials_,
+      rasterize_backward_, project_backward_, project_pose_jvp_, rasterize_pose_jvp_, partials_sum_;
+  Buffer d_rgb_, d_alpha_, d_depth_, isect_grads_, d_params_, d_sh_, pose_partials_, pose_sums_,
       screen_jvp_, jacobian_;
 };
 
