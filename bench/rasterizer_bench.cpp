@@ -48,7 +48,9 @@ void report(benchmark::State& state, splat::Rasterizer& rasterizer, const splat:
                           sizeof(float)) / mib;
   // Time per stage and iteration (Vulkan timestamps, CPU wall time), the four largest.
   std::vector<std::pair<double, std::string>> stages;
-  for (const auto& [name, ms] : rasterizer.stage_times_ms()) stages.push_back({ms, name});
+  double shaders = 0;
+  for (const auto& [name, ms] : rasterizer.stage_times_ms()) stages.push_back({ms, name}), shaders += ms;
+  if (!stages.empty()) state.counters["shaders_ms"] = shaders / static_cast<double>(state.iterations());
   std::sort(stages.rbegin(), stages.rend());
   for (std::size_t k = 0; k < std::min<std::size_t>(4, stages.size()); ++k) {
     state.counters[stages[k].second + "_ms"] = stages[k].first / static_cast<double>(state.iterations());

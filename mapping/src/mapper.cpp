@@ -95,7 +95,7 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
   if (size() > 0) {
     const splat::Camera camera = splat::posed(f.camera, T_cam_world);
     const splat::ForwardResult render =
-        device_ ? device_->render(camera, splat::images_only()) : rasterizer_.forward(map_, camera, splat::images_only());
+        device_ ? device_->render(camera, splat::images_only(), true) : rasterizer_.forward(map_, camera, splat::images_only());
     std::vector<float> errors;
     for (std::size_t p = 0; p < f.depth.size(); ++p) {
       if (f.depth[p] > 0 && render.alpha[p] > config_.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));

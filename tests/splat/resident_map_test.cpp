@@ -83,6 +83,15 @@ TEST(ResidentMap, KeepsWhatItIsGivenThroughAppendsAndPruning) {
     for (float m : splat::param_group(moments.m, group)) ASSERT_EQ(m, 0.f) << "appended Gaussians start with zero moments";
   }
   EXPECT_EQ(moments.steps, std::vector<uint32_t>(expected.size(), 0u));
+  // Its renders are the backend's renders of the map it holds; coverage brings back two images.
+  const splat::ForwardResult host = rasterizer.forward(expected, a.camera, splat::images_only());
+  const splat::ForwardResult all = device->render(a.camera, splat::images_only(), false);
+  const splat::ForwardResult coverage = device->render(a.camera, splat::images_only(), true);
+  EXPECT_EQ(all.rgb, host.rgb);
+  EXPECT_EQ(all.depth, host.depth);
+  EXPECT_EQ(coverage.alpha, host.alpha);
+  EXPECT_EQ(coverage.depth_normalized, host.depth_normalized);
+  EXPECT_TRUE(coverage.rgb.empty() && coverage.depth.empty());
   EXPECT_THROW(device->keep(std::vector<uint8_t>(3, 1)), splat::Error) << "one flag per Gaussian";
   SceneOptions degree0;
   degree0.sh_degree = 0;

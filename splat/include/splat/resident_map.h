@@ -70,8 +70,10 @@ class ResidentMap {
   virtual void drop_target(uint64_t key) = 0;
   virtual bool has_target(uint64_t key) const = 0;
 
-  // Renders the map: images only (ForwardResult's intermediates stay empty).
-  virtual ForwardResult render(const Camera& camera, const RenderSettings& settings) = 0;
+  // Renders the map: its images (ForwardResult's intermediates stay empty), or where
+  // `coverage_only` just alpha and depth_normalized (what densification tests): a third of the
+  // bytes.
+  virtual ForwardResult render(const Camera& camera, const RenderSettings& settings, bool coverage_only) = 0;
   // One step: render at `camera` (the target's size), the loss against target `key`, its
   // gradients, and Adam on every Gaussian at rates x lr_scale. `isotropic` moves the three log
   // scales of a Gaussian together and leaves rotations. Throws splat::Error for an unknown key,

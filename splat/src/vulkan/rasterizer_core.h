@@ -33,11 +33,16 @@ class RasterizerCore {
   virtual std::unique_lock<std::mutex> lock() = 0;
   virtual PrefixSum& prefix_sum() = 0;
 
-  // Renders the device map (caller holds lock()). With `images`, downloads the images into it
-  // and runs the batch; without, leaves the last submission recorded for the caller to extend
-  // and run. Returns the frame's device state, for images() and record_backward().
-  virtual std::shared_ptr<void> render(const DeviceMap& map, const Camera& camera,
-                                       const RenderSettings& settings, ForwardResult* images) = 0;
+  // Which images a render brings back to the host.
+  enum class Download {
+    kNone,      // none: the last submission stays recorded for the caller to extend and run
+    kCoverage,  // alpha and depth_normalized
+    kImages,    // every image
+  };
+  // Renders the device map (caller holds lock()) into `images` as `download` says (images may be
+  // null with kNone). Returns the frame's device state, for images() and record_backward().
+  virtual std::shared_ptr<void> render(const DeviceMap& map, const Camera& camera, const RenderSettings& settings,
+                                       ForwardResult* images, Download download) = 0;
   struct Images {
     const Buffer* rgb = nullptr;    // [H, W, 3]
     const Buffer* alpha = nullptr;  // [H, W]

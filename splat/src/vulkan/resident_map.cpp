@@ -189,11 +189,12 @@ class VulkanResidentMap final : public ResidentMap {
   }
   bool has_target(uint64_t key) const override { return targets_.count(key) != 0; }
 
-  ForwardResult render(const Camera& camera, const RenderSettings& settings) override {
+  ForwardResult render(const Camera& camera, const RenderSettings& settings, bool coverage_only) override {
     if (count_ == 0) throw Error("resident map: render of an empty map");
     auto lock = core_.lock();
     ForwardResult f;
-    core_.render(device_map(), camera, settings, &f);
+    core_.render(device_map(), camera, settings, &f,
+                 coverage_only ? RasterizerCore::Download::kCoverage : RasterizerCore::Download::kImages);
     return f;
   }
 
@@ -214,7 +215,8 @@ class VulkanResidentMap final : public ResidentMap {
     d_alpha_.reserve(pixels * 4);
     d_depth_.reserve(pixels * 4);
     adam_params_.reserve(sizeof(io::AdamParams));
-    const std::shared_ptr<void> frame = core_.render(device_map(), camera, RenderSettings{}, nullptr);
+    const std::shared_ptr<void> frame =
+        core_.render(device_map(), camera, RenderSettings{}, nullptr, RasterizerCore::Download::kNone);
     const RasterizerCore::Images images = core_.images(frame);
     loss_.record(batch,
                  {images.rgb, images.alpha, images.depth, &t.rgb, &t.depth, t.ignoring ? &t.ignore : nullptr, &d_rgb_,

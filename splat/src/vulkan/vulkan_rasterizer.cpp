@@ -200,7 +200,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
   std::unique_lock<std::mutex> lock() override { return std::unique_lock(mutex_); }
   PrefixSum& prefix_sum() override { return scan_; }
   std::shared_ptr<void> render(const DeviceMap& map, const Camera& camera,
-                               const RenderSettings& settings, ForwardResult* images) override {
+                               const RenderSettings& settings, ForwardResult* images, Download download) override {
     camera.validate("rasterize");
     std::shared_ptr<FrameState> state = acquire_state();
     ForwardResult local;
@@ -209,7 +209,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
     f.settings = settings;
     f.settings.intermediates = false;
     f.gaussians.sh_degree = map.sh_degree;
-    render(*state, f, &map, images != nullptr);
+    render(*state, f, &map, download);
     return state;
   }
   Images images(const std::shared_ptr<void>& frame) override {
@@ -244,7 +244,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
     f.gaussians = gaussians;
     f.camera = camera;
     f.settings = settings;
-    render(*state, f, nullptr, true);
+    render(*state, f, nullptr, Download::kImages);
     f.backend_state = state;
     return f;
   }
@@ -344,7 +344,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
     again.gaussians = forward.gaussians;
     again.camera = forward.camera;
     again.settings = forward.settings;
-    render(*state, again, nullptr, true);
+    render(*state, again, nullptr, Download::kImages);
     return state;
   }
 
@@ -374,10 +374,10 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
   }
 
   // Renders f.gaussians, or the device map `resident` where given (f.gaussians then only gives
-  // the SH degree). With `finish`, downloads the images into f and runs the batch; otherwise the
-  // second submission stays recorded. A resident render reports no cull statistics: they are
-  // one word per Gaussian.
-  void render(FrameState& s, ForwardResult& f, const DeviceMap* resident, bool finish) {
+  // the SH degree), downloading into f what `download` says and then running the batch (kNone:
+  // the second submission stays recorded). A resident render reports no cull statistics: they
+  // are one word per Gaussian.
+  void render(FrameState& s, ForwardResult& f, const DeviceMap* resident, Download download) {
     const GaussiansView& g = f.gaussians;
     const Camera& camera = f.camera;
     const std::size_t n = resident ? resident->count : g.size();
@@ -467,10 +467,12 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
     f.tiles_x = int(s.tiles_x);
     f.tiles_y = int(s.tiles_y);
     f.stats.intersections = m;
-    if (!finish) return;
-    download_into(batch_, s.rgb, f.rgb, pixels * 3);
+    if (download == Download::kNone) return;
+    if (download == Download::kImages) {
+      download_into(batch_, s.rgb, f.rgb, pixels * 3);
+      download_into(batch_, s.depth, f.depth, pixels);
+    }
     download_into(batch_, s.alpha, f.alpha, pixels);
-    download_into(batch_, s.depth, f.depth, pixels);
     download_into(batch_, s.depth_normalized, f.depth_normalized, pixels);
     if (f.settings.intermediates) {
       download_into(batch_, s.last, f.last_contributor, pixels);
