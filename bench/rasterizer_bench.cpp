@@ -28,10 +28,12 @@ const gslam::bench::Workload* workload(std::size_t count, int width, int height)
   return cache[key] ? &*cache[key] : nullptr;
 }
 
-// One rasterizer per backend for the whole run (Vulkan pipelines are built once).
+// One rasterizer per backend for the whole run (Vulkan pipelines are built once), destroyed
+// before main returns: the NVIDIA driver crashes when a device outlives its atexit teardown.
+std::map<std::string, std::unique_ptr<splat::Rasterizer>> backends;
+
 splat::Rasterizer* backend(const std::string& name) {
-  static std::map<std::string, std::unique_ptr<splat::Rasterizer>> cache;
-  auto& r = cache[name];
+  auto& r = backends[name];
   if (!r) r = name == "cpu" ? splat::make_cpu_rasterizer() : splat::make_vulkan_rasterizer();
   return r.get();
 }
@@ -55,6 +57,10 @@ void report(benchmark::State& state, splat::Rasterizer& rasterizer, const splat:
   for (std::size_t k = 0; k < std::min<std::size_t>(4, stages.size()); ++k) {
     state.counters[stages[k].second + "_ms"] = stages[k].first / static_cast<double>(state.iterations());
   }
+  // Every stage, on stderr (the table keeps four): where a step's time goes.
+  std::fprintf(stderr, "%s stages, ms per iteration:", rasterizer.name().c_str());
+  for (const auto& [ms, name] : stages) std::fprintf(stderr, " %s %.3f", name.c_str(), ms / static_cast<double>(state.iterations()));
+  std::fprintf(stderr, "\n");
   state.SetLabel(rasterizer.name());
 }
 
@@ -184,5 +190,6 @@ int main(int argc, char** argv) {
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  backends.clear();
   return 0;
 }

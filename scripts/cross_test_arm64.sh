@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Cross-builds gslam for arm64 (Jetson class) with a portable -march and runs the CPU test
-# suites (splat_tests, tracking_tests, mapping_tests) under qemu-user-static.
+# Cross-builds gslam for arm64 (Jetson class) with a portable -march and the Vulkan backend
+# (Jetson GPUs run Vulkan; its shaders compile with the build machine's glslang), and runs the
+# test suites splat_tests, tracking_tests and mapping_tests under qemu-user-static: the CPU
+# tests, and the Vulkan backend's own on Mesa's arm64 lavapipe from the sysroot.
 # Target libraries come from an arm64 sysroot: Debian 12's arm64 packages extracted by
 # mmdebstrap into a folder (no maintainer scripts run, nothing installed on this machine).
 # Several -dev packages (OpenEXR, glog, gflags) are not Multi-Arch, so installing their arm64
@@ -21,11 +23,11 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# The arm64 versions of the packages scripts/install_deps.sh installs (less Vulkan, the viewer
-# and the tools: those parts are built natively on the device).
+# The arm64 versions of the packages scripts/install_deps.sh installs (less the viewer and the
+# tools: those parts are built natively on the device).
 target_packages=libc6-dev,libstdc++-12-dev,libeigen3-dev,libglm-dev,libpng-dev,libjpeg-dev,libopenexr-dev
 target_packages+=,libtinygltf-dev,nlohmann-json3-dev,libcli11-dev,libgtest-dev,libstb-dev,libopencv-dev,libceres-dev
-target_packages+=,libzstd-dev,liblz4-dev
+target_packages+=,libzstd-dev,liblz4-dev,libvulkan-dev,mesa-vulkan-drivers
 sysroot=${GSLAM_ARM64_SYSROOT:-$HOME/.cache/gslam/sysroot-arm64}
 stamp="$sysroot/.gslam-packages"
 if ! [ -f "$stamp" ] || [ "$(cat "$stamp")" != "$target_packages" ]; then
@@ -55,7 +57,7 @@ fi
 build=${GSLAM_ARM64_BUILD_DIR:-build-arm64}
 mkdir -p "$build"
 GSLAM_ARM64_SYSROOT="$sysroot" cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake -DGSLAM_NATIVE_ARCH=OFF -DGSLAM_ENABLE_VULKAN=OFF \
+  -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake -DGSLAM_NATIVE_ARCH=OFF \
   -DGSLAM_BUILD_BENCHMARKS=OFF -DGSLAM_WARNINGS_AS_ERRORS=ON > "$build/configure.log"
 suites=(splat_tests tracking_tests mapping_tests)
 cmake --build "$build" --target "${suites[@]}"
