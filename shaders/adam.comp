@@ -3,7 +3,7 @@
 // gradients: the same update as splat::adam_update (the moments first, then the parameter),
 // in float where the CPU computes in double, with this Gaussian's own step count.
 #extension GL_GOOGLE_include_directive : require
-#include "resident_io.h"
+#include "shader_io.h"
 
 layout(local_size_x = 256) in;
 layout(std430, binding = 0) readonly buffer Params { AdamParams adam; };

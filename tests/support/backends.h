@@ -19,7 +19,7 @@ std::vector<std::string> backend_names();
 splat::Rasterizer* shared_backend(const std::string& name, std::string& why_not);
 
 // Whether a missing Vulkan device fails tests instead of skipping them (GSLAM_REQUIRE_GPU_TESTS,
-// on in CI, so the Vulkan tests cannot silently vanish).
+// at build time, on in CI, or in the environment: the Vulkan tests cannot silently vanish).
 bool gpu_tests_required();
 
 }  // namespace gslam::test

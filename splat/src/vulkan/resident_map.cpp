@@ -9,7 +9,6 @@
 #include "adam_spv.h"
 #include "compact_flags_spv.h"
 #include "compact_spv.h"
-#include "resident_io.h"
 #include "shader_io.h"
 #include "splat/error.h"
 #include "vulkan/mapping_loss.h"

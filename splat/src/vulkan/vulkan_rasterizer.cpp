@@ -20,7 +20,6 @@
 #include "rasterize_forward_spv.h"
 #include "rasterize_pose_jvp_spv.h"
 #include "render_stats.h"
-#include "resident_io.h"
 #include "shader_io.h"
 #include "splat/error.h"
 #include "tiles_count_spv.h"
