@@ -433,6 +433,9 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   }
   adam_.restore(std::move(s.adam));
   map_ = std::move(s.map);
+  if (device_) {
+    for (const Keyframe& kf : keyframes_) device_->drop_target(kf.number);
+  }
   keyframes_ = std::move(keyframes);
   vignetting_ = s.vignetting;
   vignetting_adam_.m = s.vignetting_m;
