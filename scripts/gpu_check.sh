@@ -2,11 +2,14 @@
 # Runs the Vulkan checks on a GPU machine, from the repository root, on the bundle that
 # scripts/gpu_bundle.sh made: STEP = tests (the Vulkan tests), bench (rasterizer_bench),
 # teddy (reconstruct + eval on the teddy prefix), render (donut orbit, Vulkan and CPU), live
-# (replayed at 1x and 0.25x), or all (the first four). Results go to $OUT (default /tmp/gpu_out).
+# (replayed at 1x and 0.25x), all (the first four), or app (on `gpu_bundle.sh app N`: reconstruct
+# with the resident map and with the host loop, then live at 1x). Results go to $OUT (default
+# /tmp/gpu_out).
 # The binaries carry their build's absolute paths (/work/main, ../shared/data): links stand in.
 # Expects the Vulkan loader and glvnd unpacked from .gl/*.deb when present (a bare NVIDIA image).
 R=$PWD; B=$R/.device-data; OUT=${OUT:-/tmp/gpu_out}; mkdir -p "$OUT"
 if ls .gl/*.deb > /dev/null 2>&1; then for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig; fi
+if [ -f "$B/app.tar.xz" ]; then mkdir -p "$B/app" && tar -C "$B/app" -xJf "$B/app.tar.xz"; ln -sfn app/bin "$B/bin"; ln -sfn app/lib "$B/lib"; fi
 export LD_LIBRARY_PATH=$B/lib:/usr/local/nvidia/lib64:/usr/local/nvidia/lib
 icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 [ -f $icd ] && export VK_DRIVER_FILES=$icd
@@ -39,4 +42,14 @@ if [ "$STEP" = live ]; then
     timeout 150 build/app/gslam live "$T" --out /tmp/live_$sp --headless --backend vulkan --speed $sp > "$OUT/live_$sp.log" 2>&1; echo "live speed $sp rc=$?"; tail -2 "$OUT/live_$sp.log"
     timeout 60 build/app/gslam eval /tmp/live_$sp --dataset "$T" --backend vulkan 2>&1 | tail -1
   done
+fi
+if [ "$STEP" = app ]; then
+  echo '{"mapping": {"device_resident": false}}' > /tmp/host_loop.json
+  for run in resident host_loop; do
+    config=(); [ $run = host_loop ] && config=(--config /tmp/host_loop.json)
+    timeout 240 build/app/gslam reconstruct "$T" --backend vulkan "${config[@]}" --out /tmp/rec_$run > "$OUT/rec_$run.log" 2>&1; echo "reconstruct $run rc=$?"; tail -2 "$OUT/rec_$run.log"
+    cp /tmp/rec_$run/summary.json "$OUT/rec_${run}_summary.json"
+  done
+  timeout 150 build/app/gslam live "$T" --out /tmp/live_1 --headless --backend vulkan --speed 1 > "$OUT/live_1.log" 2>&1; echo "live rc=$?"; tail -2 "$OUT/live_1.log"
+  cp /tmp/live_1/summary.json "$OUT/live_1_summary.json"
 fi
