@@ -131,6 +131,22 @@ struct AdamParams {
   uint isotropic;  // 1: the three log-scales move by their mean gradient, rotations not at all
 };
 
+// The free-space test of Gaussian centres against a stored frame's depth (free_space_test.comp;
+// ResidentMap::free_space_test). Codes, 2 bits per Gaussian, 16 per word:
+GSLAM_CONST uint kFreeSpaceNone = 0u;     // no verdict: off the image, too near, a neighbour unmeasured
+GSLAM_CONST uint kFreeSpaceThrough = 1u;  // every depth around it is farther by more than the margin
+GSLAM_CONST uint kFreeSpaceOn = 2u;       // a depth around it is within the margin
+struct FreeSpaceParams {
+  float fx, fy, cx, cy;
+  float rotation[9];     // W of p_cam = W p_world + t, row-major
+  float translation[3];  // t
+  float near_z;          // centres nearer than this get no verdict
+  float margin, margin_per_metre;  // the margin at depth z: margin + margin_per_metre * z
+  uint width, height;
+  uint first, count;     // Gaussians [first, count) are tested
+  uint has_ignore;       // 1: the ignore mask is bound; ignored pixels count as unmeasured
+};
+
 #ifdef __cplusplus
 }  // namespace splat::io
 #endif

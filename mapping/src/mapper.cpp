@@ -84,10 +84,6 @@ void Mapper::push_to_device() {
   host_current_ = host_adam_current_ = true;
 }
 
-std::vector<float> Mapper::group(splat::ParamGroup group) const {
-  if (device_ && !host_current_) return device_->read_group(group);
-  return splat::param_group(map_, group);
-}
 
 std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
                             std::size_t anchor) {
@@ -279,10 +275,16 @@ splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
   return result;
 }
 
+splat::ResidentMap::FreeSpaceTest Mapper::free_space_test() const {
+  // Centres nearer than 10 cm get no verdict; the margin grows 2% a metre, with depth noise.
+  return {0.1f, static_cast<float>(config_.free_space_margin), 0.02f};
+}
+
 void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, std::size_t first) {
   const int w = f.width(), h = f.height();
   const Eigen::Matrix3f r = T_cam_world.linear().cast<float>();
   const Eigen::Vector3f t = T_cam_world.translation().cast<float>();
+  const splat::ResidentMap::FreeSpaceTest test = free_space_test();
   // The means alone, kept until the device map changes: the sweep asks for every frame.
   if (device_ && !host_current_ && !means_cached_) {
     device_means_ = device_->read_group(splat::ParamGroup::kMeans);
@@ -290,16 +292,15 @@ void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry
   }
   const std::vector<float>& means = device_ && !host_current_ ? device_means_ : map_.means;
   const std::size_t n = size();
-  seen_through_.resize(n, 0);
-  seen_on_.resize(n, 0);
+  std::vector<splat::FreeSpace> verdicts(n > first ? n - first : 0, splat::FreeSpace::kNone);
   for (std::size_t i = first; i < n; ++i) {
     const Eigen::Vector3f p = r * Eigen::Vector3f(means[i * 3], means[i * 3 + 1], means[i * 3 + 2]) + t;
-    if (!(p.z() > 0.1f)) continue;
+    if (!(p.z() > test.near_z)) continue;
     const float u = static_cast<float>(f.camera.fx) * p.x() / p.z() + static_cast<float>(f.camera.cx);
     const float v = static_cast<float>(f.camera.fy) * p.y() / p.z() + static_cast<float>(f.camera.cy);
     if (!(u >= 1 && v >= 1 && u < static_cast<float>(w - 1) && v < static_cast<float>(h - 1))) continue;
     const int x = static_cast<int>(u), y = static_cast<int>(v);
-    const float margin = static_cast<float>(config_.free_space_margin) + 0.02f * p.z();
+    const float margin = test.margin + test.margin_per_metre * p.z();
     bool through = true, measured = true, on = false;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
@@ -313,26 +314,43 @@ void Mapper::observe_free_space(const splat::RgbdFrame& f, const Eigen::Isometry
         on = on || std::abs(z - p.z()) <= margin;
       }
     }
-    if (!measured) continue;
-    if (through && seen_through_[i] < UINT16_MAX) ++seen_through_[i];
-    if (on && seen_on_[i] < UINT16_MAX) ++seen_on_[i];
+    if (measured) verdicts[i - first] = through ? splat::FreeSpace::kThrough : on ? splat::FreeSpace::kOn : splat::FreeSpace::kNone;
+  }
+  count_free_space(verdicts, first);
+}
+
+void Mapper::count_free_space(const std::vector<splat::FreeSpace>& verdicts, std::size_t first) {
+  seen_through_.resize(size(), 0);
+  seen_on_.resize(size(), 0);
+  for (std::size_t j = 0; j < verdicts.size(); ++j) {
+    const std::size_t i = first + j;
+    if (verdicts[j] == splat::FreeSpace::kThrough && seen_through_[i] < UINT16_MAX) ++seen_through_[i];
+    if (verdicts[j] == splat::FreeSpace::kOn && seen_on_[i] < UINT16_MAX) ++seen_on_[i];
   }
 }
 
 Mapper::Pruned Mapper::prune() {
   const std::size_t n = size();
-  const std::vector<float> opacity_logits = group(splat::ParamGroup::kOpacityLogits);
-  const std::vector<float> log_scales = group(splat::ParamGroup::kLogScales);
   std::vector<uint8_t> keep(n, 1);
   seen_through_.resize(n, 0);
   seen_on_.resize(n, 0);
   const float min_logit = static_cast<float>(std::log(config_.prune_opacity / (1 - config_.prune_opacity)));
   const float max_log_scale = static_cast<float>(std::log(config_.prune_max_scale));
+  // Faint or oversized: tested where the map is.
+  std::vector<uint8_t> removable;
+  if (device_ && !host_current_) {
+    removable = device_->faint_or_oversized(min_logit, max_log_scale);
+  } else {
+    removable.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float* s = &map_.log_scales[i * 3];
+      removable[i] = map_.opacity_logits[i] < min_logit || std::max({s[0], s[1], s[2]}) > max_log_scale;
+    }
+  }
   Pruned removed;
   for (std::size_t i = 0; i < n; ++i) {
-    const float largest = std::max({log_scales[i * 3], log_scales[i * 3 + 1], log_scales[i * 3 + 2]});
     const bool ghost = seen_through_[i] >= config_.ghost_views && seen_through_[i] > 2 * seen_on_[i];
-    if (opacity_logits[i] < min_logit || largest > max_log_scale || ghost) {
+    if (removable[i] || ghost) {
       keep[i] = 0;
       ++removed.gaussians;
       removed.ghosts += ghost;
@@ -479,8 +497,13 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   MappingStats stats;
   keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
-  if (device_) device_->set_target(newest.number, newest.frame);
-  observe_free_space(newest.frame, newest.T_cam_world);
+  if (device_) {
+    device_->set_target(newest.number, newest.frame);
+    count_free_space(device_->free_space_test(newest.number, splat::posed(newest.frame.camera, newest.T_cam_world), 0,
+                                              free_space_test()), 0);
+  } else {
+    observe_free_space(newest.frame, newest.T_cam_world);
+  }
   stats.added = densify(newest.frame, newest.T_cam_world, false, newest.number);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();

@@ -34,15 +34,27 @@ TEST(ResidentMapping, GivesTheCpuBackendsMapAndPoses) {
   auto truth = [&](std::size_t i) { return dataset.entries[i].T_world_cam_truth->inverse(); };
 
   vulkan.reset_transfers();
-  int iterations = 0;
+  int iterations = 0, keyframes = 0;
+  std::size_t added = 0, largest = 0;
   for (std::size_t i = 0; i < 25; i += 4) {
     const splat::RgbdFrame frame = dataset.load(i);
     const mapping::MappingStats a = reference.add_keyframe(frame, truth(i));
     const mapping::MappingStats b = device.add_keyframe(frame, truth(i));
     iterations += b.iterations;
+    ++keyframes;
+    added += b.added;
+    largest = std::max(largest, device.size() + b.pruned);
     EXPECT_EQ(a.window, b.window) << "keyframe " << i;
   }
   const splat::Rasterizer::Transfers moved = vulkan.transfers();
+  // What a keyframe moves: its image up (colour and depth, at the mapping resolution) and its
+  // new Gaussians; its coverage render down (alpha, normalized depth) for densification; and
+  // bits per Gaussian for the free-space and pruning tests. Nothing grows with the map but the
+  // bits, here allowed a byte per Gaussian each way.
+  const std::size_t pixels = std::size_t(o.width / config.resolution_factor) * std::size_t(o.height / config.resolution_factor);
+  const std::size_t gaussian_bytes = (3 + 3 + 4 + 1 + 3) * 4;
+  EXPECT_LE(moved.to_device, keyframes * (pixels * 4 * 4 + largest + 1024) + added * gaussian_bytes);
+  EXPECT_LE(moved.to_host, keyframes * (pixels * 2 * 4 + largest + 1024) + std::size_t(iterations) * 256);
   // The final refinement's path: frames outside the keyframes, densified, with the vignetting
   // learnt (refine_vignetting_rate), then pruning.
   for (std::size_t i : {2u, 10u, 18u}) {

@@ -3,6 +3,7 @@
 // own forward and backward, the CPU losses, Adam), and what crosses the bus per step.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numeric>
@@ -117,6 +118,67 @@ TEST(ResidentMap, RefusesUnknownTargetsWrongSizesAndAnEmptyMap) {
   EXPECT_THROW(device->set_target(8, frame), splat::Error) << "depth of the wrong size";
   device->drop_target(7);
   EXPECT_FALSE(device->has_target(7));
+}
+
+// The tests that run where the map is, against the same tests on the host's copy.
+TEST(ResidentMap, FreeSpaceAndPruningTestsGiveTheHostsVerdicts) {
+  GSLAM_REQUIRE_RESIDENT(device, rasterizer, 1);
+  gslam::test::Scene<float> s = scene(2000, 64, 48, 6);
+  for (std::size_t i = 0; i < s.gaussians.size(); i += 5) s.gaussians.opacity_logits[i] = -8;  // faint
+  for (std::size_t i = 1; i < s.gaussians.size(); i += 7) s.gaussians.log_scales[i * 3 + 1] = 1;  // oversized
+  splat::RgbdFrame frame = target_frame(rasterizer, s.camera, 400);
+  frame.ignore.assign(frame.depth.size(), 0);
+  for (std::size_t p = 0; p < frame.ignore.size(); p += 13) frame.ignore[p] = 1;
+  device->assign(s.gaussians, nullptr);
+  device->set_target(1, frame);
+  const splat::ResidentMap::FreeSpaceTest test{0.1f, 0.05f, 0.02f};
+  const std::size_t first = 500;
+  const std::vector<splat::FreeSpace> verdicts = device->free_space_test(1, s.camera, first, test);
+  ASSERT_EQ(verdicts.size(), s.gaussians.size() - first);
+  const Eigen::Matrix3f r = s.camera.T_cam_world.linear().cast<float>();
+  const Eigen::Vector3f t = s.camera.T_cam_world.translation().cast<float>();
+  const int w = s.camera.width, h = s.camera.height;
+  std::size_t differ = 0, through = 0, on = 0;
+  for (std::size_t i = first; i < s.gaussians.size(); ++i) {
+    const float* m = &s.gaussians.means[i * 3];
+    const Eigen::Vector3f p = r * Eigen::Vector3f(m[0], m[1], m[2]) + t;
+    splat::FreeSpace want = splat::FreeSpace::kNone;
+    const float u = float(s.camera.fx) * p.x() / p.z() + float(s.camera.cx), v = float(s.camera.fy) * p.y() / p.z() + float(s.camera.cy);
+    if (p.z() > test.near_z && u >= 1 && v >= 1 && u < float(w - 1) && v < float(h - 1)) {
+      const float margin = test.margin + test.margin_per_metre * p.z();
+      bool all_through = true, any_on = false, measured = true;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const std::size_t k = std::size_t(int(v) + dy) * std::size_t(w) + std::size_t(int(u) + dx);
+          measured = measured && frame.depth[k] > 0 && !frame.ignore[k];
+          all_through = all_through && frame.depth[k] > p.z() + margin;
+          any_on = any_on || std::abs(frame.depth[k] - p.z()) <= margin;
+        }
+      }
+      if (measured) want = all_through ? splat::FreeSpace::kThrough : any_on ? splat::FreeSpace::kOn : splat::FreeSpace::kNone;
+    }
+    differ += verdicts[i - first] != want;
+    through += want == splat::FreeSpace::kThrough;
+    on += want == splat::FreeSpace::kOn;
+  }
+  EXPECT_GT(through, 20u) << "the scene has centres in front of the frame's surface";
+  EXPECT_GT(on, 20u) << "and on it";
+  // A centre exactly at a margin or a pixel edge may fall either way with the order of rounding
+  // (the host's compiler may fuse multiply-adds): at most one in 500.
+  EXPECT_LE(differ, verdicts.size() / 500) << differ << " of " << verdicts.size() << " verdicts differ";
+
+  const float min_logit = -5.3f, max_log_scale = -0.7f;
+  const std::vector<uint8_t> flags = device->faint_or_oversized(min_logit, max_log_scale);
+  ASSERT_EQ(flags.size(), s.gaussians.size());
+  std::size_t flagged = 0;
+  for (std::size_t i = 0; i < flags.size(); ++i) {
+    const float* ls = &s.gaussians.log_scales[i * 3];
+    const bool want = s.gaussians.opacity_logits[i] < min_logit || std::max({ls[0], ls[1], ls[2]}) > max_log_scale;
+    ASSERT_EQ(bool(flags[i]), want) << "Gaussian " << i;
+    flagged += want;
+  }
+  EXPECT_GT(flagged, s.gaussians.size() / 4);
+  EXPECT_LT(flagged, s.gaussians.size() / 2);
 }
 
 // The step on the device against the same step on the host: the backend's forward and

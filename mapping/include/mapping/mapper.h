@@ -194,8 +194,10 @@ class Mapper {
   splat::MappingStepResult device_step(const Keyframe& kf, uint64_t key, Step step);
   // optimize_step's loss on the host (the reference), then the map's Adam step.
   splat::MappingStepResult host_step(const Keyframe& kf, Step step);
-  // The map's means, opacity logits or log scales, from wherever the map lives.
-  std::vector<float> group(splat::ParamGroup group) const;
+  // The free-space test's settings (ghost_views): one place for the host's and the device's.
+  splat::ResidentMap::FreeSpaceTest free_space_test() const;
+  // Adds one view's free-space verdicts, of the Gaussians from `first` on, to their counts.
+  void count_free_space(const std::vector<splat::FreeSpace>& verdicts, std::size_t first);
   // Makes map_ (and with `moments`, the Adam state) the device's; after a host change, pushes
   // them back. Both no-ops without a device map.
   void pull_from_device(bool moments) const;

@@ -16,6 +16,14 @@
 
 namespace splat {
 
+// Verdicts of the free-space test of a Gaussian's centre against a frame's depth
+// (ResidentMap::free_space_test).
+enum class FreeSpace : uint8_t {
+  kNone = 0,     // no verdict: off the image, too near, or a pixel around it unmeasured
+  kThrough = 1,  // every depth around it is farther than the centre by more than the margin
+  kOn = 2,       // a depth around it is within the margin of the centre
+};
+
 // The mapping loss, as the CPU composes it from losses.h: color_weight x l1_loss plus
 // ssim_weight x dssim_loss of the colour the camera records (the render times the vignetting
 // gain 1 + k1 r^2 + k2 r^4, r^2 = ((x + 0.5 - cx) / fx)^2 + ((y + 0.5 - cy) / fy)^2), plus
@@ -61,8 +69,22 @@ class ResidentMap {
   virtual void keep(std::span<const uint8_t> keep) = 0;
   // The map, and its Adam state where `moments` is given: a whole-map transfer.
   virtual void read(Gaussians& map, AdamMoments* moments) = 0;
-  // One parameter group, [N, width]: what pruning and the free-space test need of the map.
+  // One parameter group, [N, width].
   virtual std::vector<float> read_group(ParamGroup group) = 0;
+
+  // Tests run where the map is, so that only their verdicts cross the bus (bits per Gaussian).
+  // The free-space test of each Gaussian's centre from `first` on against the depth of the frame
+  // stored under `key`, seen from `camera` (its size): the verdict of its pixel's 3x3
+  // neighbourhood, with no verdict for a centre nearer than near_z or within a pixel of the
+  // border, and a margin of margin + margin_per_metre x the centre's depth.
+  struct FreeSpaceTest {
+    float near_z = 0, margin = 0, margin_per_metre = 0;  // the caller's (mapping's) values
+  };
+  virtual std::vector<FreeSpace> free_space_test(uint64_t key, const Camera& camera, std::size_t first,
+                                                 const FreeSpaceTest& test) = 0;
+  // Per Gaussian, 1 where its opacity logit is below min_opacity_logit or its largest log scale
+  // above max_log_scale: pruning's test.
+  virtual std::vector<uint8_t> faint_or_oversized(float min_opacity_logit, float max_log_scale) = 0;
 
   // Stores a frame to fit under `key` (its colour, depth and ignore mask), replacing any frame
   // stored under it; the frame's camera gives the image size. Frames stay until dropped.

@@ -3,12 +3,15 @@
 // (mapping_loss.h), the backward pass and Adam (adam.comp) and runs them in two submissions
 // (the render's intersection count comes back in between); pruning compacts on the device
 // (compact_flags.comp, the prefix sum, compact.comp) and appends upload only the new rows.
+#include <bit>
 #include <map>
 #include <string>
 
 #include "adam_spv.h"
 #include "compact_flags_spv.h"
 #include "compact_spv.h"
+#include "free_space_test_spv.h"
+#include "prune_flags_spv.h"
 #include "shader_io.h"
 #include "splat/error.h"
 #include "vulkan/mapping_loss.h"
@@ -41,10 +44,14 @@ class VulkanResidentMap final : public ResidentMap {
         adam_(context_, kAdamSpv, 13, "adam"),
         compact_flags_(context_, kCompactFlagsSpv, 2, "compact_flags"),
         compact_(context_, kCompactSpv, 4, "compact"),
+        free_space_(context_, kFreeSpaceTestSpv, 5, "free_space_test"),
+        prune_flags_(context_, kPruneFlagsSpv, 3, "prune_flags"),
         loss_(context_),
         adam_params_(context_),
         keep_bits_(context_),
         offsets_(context_),
+        test_params_(context_),
+        verdicts_(context_),
         d_rgb_(context_),
         d_alpha_(context_),
         d_depth_(context_) {
@@ -153,6 +160,58 @@ class VulkanResidentMap final : public ResidentMap {
     return values;
   }
 
+  std::vector<FreeSpace> free_space_test(uint64_t key, const Camera& camera, std::size_t first,
+                                         const FreeSpaceTest& test) override {
+    const Target& t = target(key, camera);
+    if (first >= count_) return {};
+    auto lock = core_.lock();
+    CommandBatch& batch = core_.batch();
+    const std::size_t tested = count_ - first, words = (tested + 15) / 16;
+    io::FreeSpaceParams p{};
+    p.fx = float(camera.fx), p.fy = float(camera.fy), p.cx = float(camera.cx), p.cy = float(camera.cy);
+    const Eigen::Matrix3f w = camera.T_cam_world.linear().cast<float>();
+    const Eigen::Vector3f tr = camera.T_cam_world.translation().cast<float>();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) p.rotation[r * 3 + c] = w(r, c);
+      p.translation[r] = tr[r];
+    }
+    p.near_z = test.near_z, p.margin = test.margin, p.margin_per_metre = test.margin_per_metre;
+    p.width = uint32_t(t.width), p.height = uint32_t(t.height);
+    p.first = uint32_t(first), p.count = uint32_t(count_);
+    p.has_ignore = t.ignoring ? 1u : 0u;
+    test_params_.reserve(sizeof(p));
+    verdicts_.reserve(words * 4);
+    batch.upload(test_params_, &p, sizeof(p));
+    batch.fill_zero(verdicts_, words * 4);
+    batch.dispatch(free_space_, {&test_params_, &arrays_[kMeans], &t.depth, t.ignoring ? &t.ignore : &t.depth, &verdicts_},
+                   {}, groups_for(tested));
+    std::vector<uint32_t> packed(words);
+    batch.download(verdicts_, packed.data(), words * 4);
+    batch.run();
+    static_assert(uint32_t(FreeSpace::kThrough) == io::kFreeSpaceThrough && uint32_t(FreeSpace::kOn) == io::kFreeSpaceOn);
+    std::vector<FreeSpace> codes(tested);
+    for (std::size_t j = 0; j < tested; ++j) codes[j] = FreeSpace((packed[j / 16] >> (j % 16 * 2)) & 3u);
+    return codes;
+  }
+
+  std::vector<uint8_t> faint_or_oversized(float min_opacity_logit, float max_log_scale) override {
+    if (count_ == 0) return {};
+    auto lock = core_.lock();
+    CommandBatch& batch = core_.batch();
+    const std::size_t words = (count_ + 31) / 32;
+    verdicts_.reserve(words * 4);
+    batch.fill_zero(verdicts_, words * 4);
+    batch.dispatch(prune_flags_, {&arrays_[kLogScales], &arrays_[kOpacity], &verdicts_},
+                   {uint32_t(count_), std::bit_cast<uint32_t>(min_opacity_logit), std::bit_cast<uint32_t>(max_log_scale)},
+                   groups_for(count_));
+    std::vector<uint32_t> packed(words);
+    batch.download(verdicts_, packed.data(), words * 4);
+    batch.run();
+    std::vector<uint8_t> flags(count_);
+    for (std::size_t i = 0; i < count_; ++i) flags[i] = uint8_t((packed[i / 32] >> (i % 32)) & 1u);
+    return flags;
+  }
+
   void set_target(uint64_t key, const RgbdFrame& frame) override {
     frame.camera.validate("resident map target");
     const std::size_t pixels = std::size_t(frame.width()) * frame.height();
@@ -200,13 +259,7 @@ class VulkanResidentMap final : public ResidentMap {
   MappingStepResult step(uint64_t key, const Camera& camera, const MappingLoss& loss, const AdamRates& rates,
                          double lr_scale, bool isotropic) override {
     if (count_ == 0) throw Error("resident map: mapping step on an empty map");
-    auto found = targets_.find(key);
-    if (found == targets_.end()) throw Error("resident map: no target frame " + std::to_string(key));
-    const Target& t = found->second;
-    if (camera.width != t.width || camera.height != t.height) {
-      throw Error("resident map: a " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                  " camera for a " + std::to_string(t.width) + "x" + std::to_string(t.height) + " target");
-    }
+    const Target& t = target(key, camera);
     auto lock = core_.lock();
     CommandBatch& batch = core_.batch();
     const std::size_t pixels = std::size_t(t.width) * t.height;
@@ -276,6 +329,17 @@ class VulkanResidentMap final : public ResidentMap {
       throw Error(std::string("resident map ") + what + ": SH degree " + std::to_string(degree) + ", the map's is " +
                   std::to_string(sh_degree_));
     }
+  }
+  // The frame stored under `key`; throws unless there is one of the camera's size.
+  const Target& target(uint64_t key, const Camera& camera) const {
+    auto found = targets_.find(key);
+    if (found == targets_.end()) throw Error("resident map: no target frame " + std::to_string(key));
+    const Target& t = found->second;
+    if (camera.width != t.width || camera.height != t.height) {
+      throw Error("resident map: a " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                  " camera for a " + std::to_string(t.width) + "x" + std::to_string(t.height) + " target");
+    }
+    return t;
   }
   DeviceMap device_map() const {
     return {&arrays_[kMeans], &arrays_[kLogScales], &arrays_[kRotations], &arrays_[kOpacity], &arrays_[kSh],
@@ -349,10 +413,10 @@ class VulkanResidentMap final : public ResidentMap {
   Context& context_;
   int sh_degree_;
   std::size_t count_ = 0;
-  Kernel adam_, compact_flags_, compact_;
+  Kernel adam_, compact_flags_, compact_, free_space_, prune_flags_;
   MappingLossKernels loss_;
   std::vector<Buffer> arrays_;  // indexed by Array
-  Buffer adam_params_, keep_bits_, offsets_;
+  Buffer adam_params_, keep_bits_, offsets_, test_params_, verdicts_;
   Buffer d_rgb_, d_alpha_, d_depth_;
   double pose_sums_[io::kPosePartials] = {};
   std::map<uint64_t, Target> targets_;
