@@ -22,10 +22,21 @@ layout(std430, binding = 12) buffer Steps { uint steps[]; };       // [N]
 
 float bias1, bias2;
 
+// base^e by squaring, in double: GLSL has no double pow.
+double power(double base, uint e) {
+  double result = 1.0lf;
+  for (; e != 0u; e >>= 1u) {
+    if ((e & 1u) != 0u) result *= base;
+    base *= base;
+  }
+  return result;
+}
+
 // Updates the moments m, v with gradient g and returns the parameter's step.
 float update(inout float m, inout float v, float g, float lr) {
-  m = adam.beta1 * m + (1.0 - adam.beta1) * g;
-  v = adam.beta2 * v + (1.0 - adam.beta2) * g * g;
+  float beta1 = float(adam.beta1), beta2 = float(adam.beta2);
+  m = beta1 * m + (1.0 - beta1) * g;
+  v = beta2 * v + (1.0 - beta2) * g * g;
   return lr * (m / bias1) / (sqrt(v / bias2) + adam.eps);
 }
 
@@ -34,8 +45,8 @@ void main() {
   if (i >= adam.count) return;
   uint t = steps[i] + 1u;
   steps[i] = t;
-  bias1 = 1.0 - pow(adam.beta1, float(t));
-  bias2 = 1.0 - pow(adam.beta2, float(t));
+  bias1 = float(1.0lf - power(adam.beta1, t));
+  bias2 = float(1.0lf - power(adam.beta2, t));
 
   float g[kGeometryFloats];
   for (uint k = 0u; k < kGeometryFloats; ++k) g[k] = d_params[i * kGeometryFloats + k];

@@ -121,11 +121,13 @@ struct LossParams {
 // opacity logit 1 (project_backward.comp's d_params layout).
 GSLAM_CONST uint kGeometryFloats = 11u;
 
-// One Adam step (storage buffer, std430, scalars only). Learning rates already include the
-// step's scale; bias corrections are computed per Gaussian from its own step count.
+// One Adam step (storage buffer, std430, scalars only; the doubles first). Learning rates
+// already include the step's scale; bias corrections are computed per Gaussian from its own
+// step count, in double as the CPU does (beta2^t in float is off by 1e-4 at small t).
 struct AdamParams {
+  double beta1, beta2;
   float lr_means, lr_log_scales, lr_rotations, lr_opacity, lr_sh_dc, lr_sh_rest;
-  float beta1, beta2, eps;
+  float eps;
   uint count;      // Gaussians
   uint sh_floats;  // SH floats per Gaussian, K * 3
   uint isotropic;  // 1: the three log-scales move by their mean gradient, rotations not at all

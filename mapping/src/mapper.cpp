@@ -124,8 +124,10 @@ std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& 
     splat::Gaussians seeds;
     seeds.sh_degree = config_.seed.sh_degree;
     added = seed_from_depth(seeded, T_cam_world.inverse(), config_.seed, seeds, mask);
-    device_->append(seeds);
-    device_changed();
+    if (added > 0) {
+      device_->append(seeds);
+      device_changed();
+    }
   } else {
     added = seed_from_depth(seeded, T_cam_world.inverse(), config_.seed, map_, mask);
     adam_.append(added, map_.sh_degree);
@@ -419,6 +421,14 @@ MapperState Mapper::state() const {
 
 void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::size_t number)>& load) {
   splat::validate(splat::GaussiansView(s.map), "checkpointed map");
+  if (s.map.sh_degree != config_.seed.sh_degree) {
+    throw splat::Error("Mapper::restore: a map of SH degree " + std::to_string(s.map.sh_degree) + ", this mapper seeds degree " +
+                       std::to_string(config_.seed.sh_degree));
+  }
+  if (!s.adam.steps.empty() && (s.adam.m.sh_degree != s.map.sh_degree || s.adam.v.sh_degree != s.map.sh_degree)) {
+    throw splat::Error("Mapper::restore: optimizer moments of SH degree " + std::to_string(s.adam.m.sh_degree) + " and " +
+                       std::to_string(s.adam.v.sh_degree) + " for a map of degree " + std::to_string(s.map.sh_degree));
+  }
   if (s.adam.steps.size() != s.map.size() && !(s.adam.steps.empty() && s.adam.m.empty())) {
     throw splat::Error("Mapper::restore: optimizer state for " + std::to_string(s.adam.steps.size()) +
                        " Gaussians, map of " + std::to_string(s.map.size()));
@@ -451,6 +461,7 @@ void Mapper::restore(MapperState s, const std::function<splat::RgbdFrame(std::si
   }
   adam_.restore(std::move(s.adam));
   map_ = std::move(s.map);
+  if (adam_.size() != map_.size()) adam_.append(map_.size(), map_.sh_degree);  // never stepped: zero moments
   if (device_) {
     for (const Keyframe& kf : keyframes_) device_->drop_target(kf.number);
   }
@@ -495,10 +506,11 @@ void Mapper::correct_keyframes(const std::vector<Eigen::Isometry3d>& world_corre
 
 MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world) {
   MappingStats stats;
-  keyframes_.push_back({splat::downsample(frame, config_.resolution_factor), T_cam_world, added_++});
+  splat::RgbdFrame mapped = splat::downsample(frame, config_.resolution_factor);
+  if (device_) device_->set_target(added_, mapped);  // first: a frame it refuses adds no keyframe
+  keyframes_.push_back({std::move(mapped), T_cam_world, added_++});
   Keyframe& newest = keyframes_.back();
   if (device_) {
-    device_->set_target(newest.number, newest.frame);
     count_free_space(device_->free_space_test(newest.number, splat::posed(newest.frame.camera, newest.T_cam_world), 0,
                                               free_space_test()), 0);
   } else {

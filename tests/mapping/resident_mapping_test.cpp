@@ -8,6 +8,7 @@
 #include "datasets/dataset.h"
 #include "datasets/synthetic_sequence.h"
 #include "mapping/mapper.h"
+#include "splat/error.h"
 #include "splat/losses.h"
 #include "splat/rasterizer.h"
 #include "support/backends.h"
@@ -116,8 +117,13 @@ TEST(ResidentMapping, CheckpointsAndLoopCorrectionsCarryTheDeviceState) {
   auto truth = [&](std::size_t i) { return dataset.entries[i].T_world_cam_truth->inverse(); };
   mapping::Mapper original(vulkan, config);
   for (std::size_t i : {0u, 4u, 8u}) original.add_keyframe(dataset.load(i), truth(i));
+  auto load = [&](std::size_t number) { return dataset.load(4 * number); };
+  mapping::MapperState wrong = original.state();
+  wrong.adam.v.sh_degree = 1;
+  mapping::Mapper refusing(vulkan, config);
+  EXPECT_THROW(refusing.restore(std::move(wrong), load), splat::Error) << "moments of another SH degree";
   mapping::Mapper restored(vulkan, config);
-  restored.restore(original.state(), [&](std::size_t number) { return dataset.load(4 * number); });
+  restored.restore(original.state(), load);
   ASSERT_TRUE(restored.device_resident());
   EXPECT_EQ(restored.map().means, original.map().means);
   EXPECT_EQ(restored.state().adam.steps, original.state().adam.steps) << "the optimizer state came back from the device";

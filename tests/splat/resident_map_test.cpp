@@ -116,6 +116,14 @@ TEST(ResidentMap, RefusesUnknownTargetsWrongSizesAndAnEmptyMap) {
   EXPECT_THROW(device->step(7, larger, loss, rates, 1, false), splat::Error) << "camera of another size";
   frame.depth.pop_back();
   EXPECT_THROW(device->set_target(8, frame), splat::Error) << "depth of the wrong size";
+  splat::RgbdFrame huge;
+  huge.camera = s.camera;
+  huge.camera.width = huge.camera.height = 4200;
+  EXPECT_THROW(device->set_target(9, huge), splat::Error) << "more pixels than the loss's workgroups cover";
+  splat::AdamMoments moments{s.gaussians, s.gaussians, std::vector<uint32_t>(s.gaussians.size(), 1)};
+  moments.v.sh_degree = 0;
+  EXPECT_THROW(device->assign(s.gaussians, &moments), splat::Error) << "moments of another SH degree";
+  EXPECT_EQ(device->size(), s.gaussians.size()) << "a refused assign leaves the map";
   device->drop_target(7);
   EXPECT_FALSE(device->has_target(7));
 }

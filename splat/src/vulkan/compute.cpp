@@ -188,8 +188,21 @@ void CommandBatch::dispatch(const Kernel& kernel, std::initializer_list<const Bu
   }
 }
 
+namespace {
+
+// Throws unless [offset, offset + bytes) lies inside the buffer.
+void check_range(const Buffer& buffer, std::size_t bytes, std::size_t offset, const char* what) {
+  if (offset > buffer.capacity() || bytes > buffer.capacity() - offset) {
+    throw Error(std::string("vulkan: ") + what + " of " + std::to_string(bytes) + " bytes at offset " +
+                std::to_string(offset) + " into a buffer of " + std::to_string(buffer.capacity()));
+  }
+}
+
+}  // namespace
+
 void CommandBatch::fill_zero(Buffer& buffer, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
+  check_range(buffer, (bytes + 3) / 4 * 4, offset, "fill");
   begin_recording();
   vkCmdFillBuffer(commands_, buffer.handle(), offset, (bytes + 3) / 4 * 4, 0);
   barrier();
@@ -198,6 +211,8 @@ void CommandBatch::fill_zero(Buffer& buffer, std::size_t bytes, std::size_t offs
 void CommandBatch::copy(const Buffer& from, Buffer& to, std::size_t bytes, std::size_t from_offset,
                         std::size_t to_offset) {
   if (bytes == 0) return;
+  check_range(from, bytes, from_offset, "copy");
+  check_range(to, bytes, to_offset, "copy");
   begin_recording();
   const VkBufferCopy region{from_offset, to_offset, bytes};
   vkCmdCopyBuffer(commands_, from.handle(), to.handle(), 1, &region);
@@ -206,6 +221,7 @@ void CommandBatch::copy(const Buffer& from, Buffer& to, std::size_t bytes, std::
 
 void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
+  check_range(buffer, bytes, offset, "upload");
   uploaded_bytes_ += bytes;
   if (buffer.mapped()) {
     std::memcpy(static_cast<char*>(buffer.mapped()) + offset, data, bytes);
@@ -218,6 +234,7 @@ void CommandBatch::upload(Buffer& buffer, const void* data, std::size_t bytes, s
 
 void CommandBatch::download(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset) {
   if (bytes == 0) return;
+  check_range(buffer, bytes, offset, "download");
   downloaded_bytes_ += bytes;
   const Buffer* source = &buffer;
   std::size_t from = offset;
@@ -237,6 +254,19 @@ Buffer& CommandBatch::next_staging(std::size_t bytes) {
   Buffer& staging = *staging_[staging_used_++];
   staging.reserve_staging(bytes);
   return staging;
+}
+
+void CommandBatch::discard() {
+  if (recording_) {
+    vk_check(vkEndCommandBuffer(commands_), "vkEndCommandBuffer");
+    vk_check(vkResetCommandBuffer(commands_, 0), "vkResetCommandBuffer");
+    recording_ = false;
+  }
+  timed_.clear();
+  after_run_.clear();
+  staging_used_ = 0;
+  for (VkDescriptorPool pool : pools_) vkResetDescriptorPool(context_.device(), pool, 0);
+  pool_in_use_ = 0;
 }
 
 void CommandBatch::run() {

@@ -61,6 +61,9 @@ class CommandBatch {
   // Buffer from `offset` bytes to host memory after run(); `data` must stay valid until then.
   void download(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0);
   void run();
+  // Drops what was recorded since the last run() (nothing is submitted, no download happens):
+  // for an operation that failed half-way, so the next run() does not submit its commands.
+  void discard();
   // Bytes given to upload() and download() since the last reset (mapped or staged alike).
   std::size_t uploaded_bytes() const { return uploaded_bytes_; }
   std::size_t downloaded_bytes() const { return downloaded_bytes_; }

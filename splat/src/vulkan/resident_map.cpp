@@ -4,6 +4,7 @@
 // (the render's intersection count comes back in between); pruning compacts on the device
 // (compact_flags.comp, the prefix sum, compact.comp) and appends upload only the new rows.
 #include <bit>
+#include <exception>
 #include <map>
 #include <string>
 
@@ -20,9 +21,33 @@
 namespace splat::vk {
 namespace {
 
+static_assert(sizeof(io::AdamParams) == 56 && sizeof(io::FreeSpaceParams) == 96,
+              "the parameter blocks must match their std430 layouts");
+
+// Vulkan guarantees 65535 workgroups along x; the loss's stages take 256 pixels each.
+constexpr std::size_t kMaxTargetPixels = std::size_t{65535} * io::kGroupSize;
+
 uint32_t groups_for(std::size_t count) {
   return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
 }
+
+// Discards what the batch recorded when the operation it guards throws half-way: its commands
+// refer to buffers the next user of the batch may reallocate.
+class DiscardOnThrow {
+ public:
+  explicit DiscardOnThrow(CommandBatch& batch) : batch_(batch) {}
+  ~DiscardOnThrow() {
+    if (std::uncaught_exceptions() <= uncaught_) return;
+    try {
+      batch_.discard();
+    } catch (...) {  // already unwinding: the first error is the one to report
+    }
+  }
+
+ private:
+  CommandBatch& batch_;
+  int uncaught_ = std::uncaught_exceptions();
+};
 
 // The per-Gaussian arrays, each [N, width] 32-bit words.
 enum Array { kMeans, kLogScales, kRotations, kOpacity, kSh, kMGeometry, kVGeometry, kMSh, kVSh, kSteps, kArrays };
@@ -70,12 +95,15 @@ class VulkanResidentMap final : public ResidentMap {
     if (moments) {
       validate_sizes(GaussiansView(moments->m), "resident map moments");
       validate_sizes(GaussiansView(moments->v), "resident map moments");
+      check_degree(moments->m.sh_degree, "assign (first moment)");
+      check_degree(moments->v.sh_degree, "assign (second moment)");
       if (moments->m.size() != map.size() || moments->v.size() != map.size() || moments->steps.size() != map.size()) {
         throw Error("resident map: moments for " + std::to_string(moments->m.size()) + " Gaussians, map of " +
                     std::to_string(map.size()));
       }
     }
     auto lock = core_.lock();
+    DiscardOnThrow guard(core_.batch());
     count_ = 0;
     write_rows(map, moments, 0);
   }
@@ -85,6 +113,7 @@ class VulkanResidentMap final : public ResidentMap {
     check_degree(added.sh_degree, "append");
     if (added.size() == 0) return;
     auto lock = core_.lock();
+    DiscardOnThrow guard(core_.batch());
     Gaussians copy;  // write_rows takes a map; the rows are few next to the map
     copy.sh_degree = added.sh_degree;
     copy.means.assign(added.means.begin(), added.means.end());
@@ -107,6 +136,7 @@ class VulkanResidentMap final : public ResidentMap {
     if (kept == count_) return;
     auto lock = core_.lock();
     CommandBatch& batch = core_.batch();
+    DiscardOnThrow guard(batch);
     const uint32_t n = uint32_t(count_);
     keep_bits_.reserve(bits.size() * 4);
     offsets_.reserve(count_ * 4);
@@ -114,7 +144,8 @@ class VulkanResidentMap final : public ResidentMap {
     std::vector<Buffer> compacted;
     for (int a = 0; a < kArrays; ++a) {
       compacted.emplace_back(context_);
-      compacted.back().reserve(std::max<std::size_t>(kept, 1) * width(a) * 4);
+      // The capacity it had: appends after pruning need not grow and copy it again.
+      compacted.back().reserve(std::max(std::max<std::size_t>(kept, 1) * width(a) * 4, arrays_[a].capacity()));
     }
     batch.upload(keep_bits_, bits.data(), bits.size() * 4);
     batch.dispatch(compact_flags_, {&keep_bits_, &offsets_}, {n}, groups_for(n));
@@ -215,11 +246,16 @@ class VulkanResidentMap final : public ResidentMap {
   void set_target(uint64_t key, const RgbdFrame& frame) override {
     frame.camera.validate("resident map target");
     const std::size_t pixels = std::size_t(frame.width()) * frame.height();
+    if (pixels > kMaxTargetPixels) {
+      throw Error("resident map target: " + std::to_string(frame.width()) + "x" + std::to_string(frame.height()) +
+                  " pixels, at most " + std::to_string(kMaxTargetPixels) + " (the loss's workgroups)");
+    }
     if (frame.rgb.size() != pixels * 3 || frame.depth.size() != pixels || (!frame.ignore.empty() && frame.ignore.size() != pixels)) {
       throw Error("resident map target: colour, depth or ignore mask does not match the " + std::to_string(frame.width()) + "x" +
                   std::to_string(frame.height()) + " camera");
     }
     auto lock = core_.lock();
+    DiscardOnThrow guard(core_.batch());
     auto [it, inserted] = targets_.try_emplace(key, context_);
     Target& t = it->second;
     t.width = frame.width();
@@ -262,6 +298,7 @@ class VulkanResidentMap final : public ResidentMap {
     const Target& t = target(key, camera);
     auto lock = core_.lock();
     CommandBatch& batch = core_.batch();
+    DiscardOnThrow guard(batch);
     const std::size_t pixels = std::size_t(t.width) * t.height;
     d_rgb_.reserve(pixels * 3 * 4);
     d_alpha_.reserve(pixels * 4);
@@ -282,8 +319,8 @@ class VulkanResidentMap final : public ResidentMap {
     p.lr_opacity = float(rates.opacity_logits * lr_scale);
     p.lr_sh_dc = float(rates.sh_dc * lr_scale);
     p.lr_sh_rest = float(rates.sh_rest * lr_scale);
-    p.beta1 = float(rates.hyper.beta1);
-    p.beta2 = float(rates.hyper.beta2);
+    p.beta1 = rates.hyper.beta1;
+    p.beta2 = rates.hyper.beta2;
     p.eps = float(rates.hyper.eps);
     p.count = uint32_t(count_);
     p.sh_floats = uint32_t(sh_floats());
