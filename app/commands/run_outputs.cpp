@@ -224,7 +224,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
     for (std::size_t i = 0; i < records_.size() && !stopping_; ++i) {
       if (!records_[i].keyframe) continue;
       const splat::Camera cam = splat::posed(intrinsics, records_[i].T_world_cam.inverse());
-      const splat::ForwardResult f = rasterizer.forward(map, cam, {});
+      const splat::ForwardResult f = rasterizer.forward(map, cam, splat::images_only());
       char name[32];
       std::snprintf(name, sizeof(name), "kf_%04zu", i);
       write_png_rgb(out_ / "keyframes" / (std::string(name) + ".png"), f.width, f.height, f.rgb);
