@@ -110,6 +110,7 @@ TEST(ResidentMapping, CheckpointsAndLoopCorrectionsCarryTheDeviceState) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 13;
+  o.width = 160, o.height = 120, o.focal = 130;  // small: the state's round trips are the point
   const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   mapping::MapperConfig config;
   config.iterations = 6;
