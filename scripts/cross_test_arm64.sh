@@ -57,7 +57,7 @@ fi
 build=${GSLAM_ARM64_BUILD_DIR:-build-arm64}
 mkdir -p "$build"
 GSLAM_ARM64_SYSROOT="$sysroot" cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake -DGSLAM_NATIVE_ARCH=OFF \
+  -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain_arm64.cmake -DGSLAM_NATIVE_ARCH=OFF -DGSLAM_ENABLE_VULKAN=ON \
   -DGSLAM_BUILD_BENCHMARKS=OFF -DGSLAM_WARNINGS_AS_ERRORS=ON > "$build/configure.log"
 suites=(splat_tests tracking_tests mapping_tests)
 cmake --build "$build" --target "${suites[@]}"
