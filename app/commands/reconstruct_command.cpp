@@ -160,7 +160,7 @@ int run_reconstruct(const ReconstructOptions& o) {
                  refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned, refined.ghosts);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
-  outputs.set_mapping(slam.mapping_totals(), slam.loop_events());
+  outputs.set_mapping(slam.mapping_totals(), slam.loop_events(), slam.mapping_on_device());
   if (!InterruptGuard::interrupted()) {  // the map's classes, from the label images if there are any
     fuse_run_labels(dataset, slam.trajectory(), *slam.map(), *rasterizer, config.mapping.refine_resolution_factor, outputs);
   }

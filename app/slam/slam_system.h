@@ -89,6 +89,8 @@ class SlamSystem {
   std::vector<Eigen::Isometry3d> trajectory() const;
   std::size_t keyframes() const;  // frames that became keyframes (mapped or skipped)
   MappingTotals mapping_totals() const;
+  // Whether the map is optimized on the backend's device (Mapper::device_resident).
+  bool mapping_on_device() const { return mapper_.device_resident(); }
   std::vector<LoopEvent> loop_events() const;
   // The camera's vignetting as the final refinement estimated it (none before).
   mapping::Vignetting vignetting() const;
