@@ -35,7 +35,7 @@ std::map<std::string, Tensor> read_safetensors(const std::filesystem::path& path
                                  std::to_string(data_size) + " data bytes");
       }
       t.values.resize((offsets[1] - offsets[0]) / 4);
-      std::memcpy(t.values.data(), data + offsets[0], offsets[1] - offsets[0]);
+      if (!t.values.empty()) std::memcpy(t.values.data(), data + offsets[0], offsets[1] - offsets[0]);  // an empty vector's data() may be null
       tensors.emplace(name, std::move(t));
     }
   } catch (const nlohmann::json::exception& e) {
