@@ -7,6 +7,7 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <system_error>
 #include <unordered_map>
 
 #include "datasets/bag_dataset.h"
@@ -101,7 +102,13 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   // Only entries whose files exist take part (the lists may name more frames than are present).
   auto present = [&](std::vector<ListEntry>& list) {
     const std::size_t before = list.size();
-    list.erase(std::remove_if(list.begin(), list.end(), [&](const ListEntry& e) { return !std::filesystem::exists(root / e.file); }), list.end());
+    // A name the file system refuses (too long, say) is a missing file, not an exception.
+    list.erase(std::remove_if(list.begin(), list.end(),
+                              [&](const ListEntry& e) {
+                                std::error_code error;
+                                return !std::filesystem::exists(root / e.file, error);
+                              }),
+               list.end());
     return before - list.size();
   };
   d.listed = rgb.size();
