@@ -1,6 +1,7 @@
 #include "batch/sequence_finder.h"
 
 #include <algorithm>
+#include <set>
 
 #include "datasets/bag_reader.h"
 #include "splat/error.h"
@@ -33,16 +34,26 @@ void add(const std::filesystem::path& root, const std::filesystem::path& sequenc
   found.push_back({name, sequence});
 }
 
+// Symbolic links are followed (a folder of links to datasets is a suite); `visited` holds the
+// folders already searched, by their canonical path, so a link back up the tree ends there and a
+// sequence linked twice is run once.
 void search(const std::filesystem::path& root, const std::filesystem::path& dir, int depth_left,
-            std::vector<FoundSequence>& found) {
-  if (looks_like_sequence(dir)) return add(root, dir, found);
+            std::set<std::filesystem::path>& visited, std::vector<FoundSequence>& found) {
   std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    if (e.is_symlink(ec)) continue;
+  const std::filesystem::path canonical = std::filesystem::canonical(dir, ec);
+  if (ec || !visited.insert(canonical).second) return;
+  if (looks_like_sequence(dir)) return add(root, dir, found);
+  // In name order: of two links to one sequence, the first by name is the one kept.
+  std::vector<std::filesystem::directory_entry> entries;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) entries.push_back(e);
+  std::sort(entries.begin(), entries.end());
+  for (const auto& e : entries) {
     if (e.is_regular_file(ec) && is_bag_file(e.path())) {
-      add(root, e.path(), found);  // a ROS recording ("teddy.bag" is named "teddy.bag")
+      if (visited.insert(std::filesystem::canonical(e.path(), ec)).second) {
+        add(root, e.path(), found);  // a ROS recording ("teddy.bag" is named "teddy.bag")
+      }
     } else if (depth_left > 0 && e.is_directory(ec)) {
-      search(root, e.path(), depth_left - 1, found);
+      search(root, e.path(), depth_left - 1, visited, found);
     }
   }
 }
@@ -52,7 +63,8 @@ void search(const std::filesystem::path& root, const std::filesystem::path& dir,
 std::vector<FoundSequence> find_sequences(const std::filesystem::path& root, int max_depth) {
   if (!std::filesystem::is_directory(root)) throw splat::Error(root.string() + ": not a folder");
   std::vector<FoundSequence> found;
-  search(root, root, max_depth, found);
+  std::set<std::filesystem::path> visited;
+  search(root, root, max_depth, visited, found);
   std::sort(found.begin(), found.end(), [](const FoundSequence& a, const FoundSequence& b) { return a.name < b.name; });
   return found;
 }

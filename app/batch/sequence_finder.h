@@ -14,8 +14,8 @@ struct FoundSequence {
 // The folders at or below `root` (at most `max_depth` levels down) that hold a sequence in a
 // layout open_dataset() reads, detected by their files (TUM or plain lists, Replica, images),
 // and the ROS recordings (.bag, .mcap) in the folders searched; a sequence's own subfolders are
-// not searched. Sorted by name; symbolic links are not
-// followed. Throws splat::Error if `root` is not a folder.
+// not searched. Sorted by name. Symbolic links are followed, each folder searched once (a link
+// loop ends, a sequence linked twice is found once). Throws splat::Error if `root` is not a folder.
 std::vector<FoundSequence> find_sequences(const std::filesystem::path& root, int max_depth = 4);
 
 }  // namespace app

@@ -52,6 +52,20 @@ TEST(SequenceFinder, FindsEveryLayoutAtAnyDepthButNotInsideASequence) {
   EXPECT_TRUE(app::find_sequences(dir / "suite" / "notes").empty());
 }
 
+// A suite made of links to sequences kept elsewhere: the links are followed, a loop of links
+// ends, and a sequence linked twice is found once.
+TEST(SequenceFinder, FollowsLinksOnceEach) {
+  TempDir dir;
+  write_sequence(dir / "data" / "teddy", 3);
+  std::filesystem::create_directories(dir / "suite");
+  std::filesystem::create_directory_symlink(dir / "data" / "teddy", dir / "suite" / "teddy");
+  std::filesystem::create_directory_symlink(dir / "data" / "teddy", dir / "suite" / "teddy_again");
+  std::filesystem::create_directory_symlink(dir / "suite", dir / "suite" / "loop");
+  const auto found = app::find_sequences(dir / "suite");
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].path, dir / "suite" / "teddy");
+}
+
 // Two generated sequences and a broken one, through the command: the table holds each run's
 // own eval figures and their mean, the broken one is a failed row with its error, and a re-run
 // skips what finished with the same settings.
