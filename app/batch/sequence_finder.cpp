@@ -27,7 +27,7 @@ bool looks_like_sequence(const std::filesystem::path& dir) {
 }
 
 void add(const std::filesystem::path& root, const std::filesystem::path& sequence, std::vector<FoundSequence>& found) {
-  std::string name = std::filesystem::relative(sequence, root).generic_string();
+  std::string name = sequence.lexically_relative(root).generic_string();  // the link's name, not its target's
   if (name == ".") name = std::filesystem::absolute(root).lexically_normal().filename().string();  // the root itself
   if (name.empty()) name = "sequence";
   std::replace(name.begin(), name.end(), '/', '_');

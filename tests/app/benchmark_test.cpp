@@ -64,6 +64,7 @@ TEST(SequenceFinder, FollowsLinksOnceEach) {
   const auto found = app::find_sequences(dir / "suite");
   ASSERT_EQ(found.size(), 1u);
   EXPECT_EQ(found[0].path, dir / "suite" / "teddy");
+  EXPECT_EQ(found[0].name, "teddy") << "named by the link";
 }
 
 // Two generated sequences and a broken one, through the command: the table holds each run's
