@@ -135,7 +135,8 @@ void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent
     events.push_back({{"frame", e.frame}, {"matched_frame", e.matched_frame}, {"inliers", e.inliers},
                       {"drift_m", e.drift_m}, {"drift_deg", e.drift_deg}, {"accepted", e.accepted}});
   }
-  extra_["loops"] = {{"accepted", accepted}, {"rejected", loops.size() - accepted}, {"events", events}};
+  extra_["loops"] = {{"accepted", accepted}, {"rejected", loops.size() - accepted}, {"events", events},
+                     {"covisible_edges", t.covisible_edges}, {"covisible_rejected", t.covisible_rejected}};
   extra_["mapping"] = {{"keyframes_mapped", t.keyframes_mapped},   {"keyframes_skipped", t.keyframes_skipped},
                        {"gaussians_added", t.gaussians_added},     {"gaussians_pruned", t.gaussians_pruned},
                        {"ghosts_pruned", t.ghosts_pruned},

@@ -186,6 +186,7 @@ json totals_to_json(const MappingTotals& t) {
   return {{"keyframes_mapped", t.keyframes_mapped}, {"keyframes_skipped", t.keyframes_skipped},
           {"keyframes_caught_up", t.keyframes_caught_up}, {"gaussians_added", t.gaussians_added},   {"gaussians_pruned", t.gaussians_pruned},
           {"ghosts_pruned", t.ghosts_pruned},
+          {"covisible_edges", t.covisible_edges}, {"covisible_rejected", t.covisible_rejected},
           {"iterations", t.iterations},             {"last_loss", t.last_loss},
           {"mapping_ms", t.mapping_ms}};
 }
@@ -198,6 +199,8 @@ MappingTotals totals_from_json(const json& j) {
   t.gaussians_added = j.at("gaussians_added").get<std::size_t>();
   t.gaussians_pruned = j.at("gaussians_pruned").get<std::size_t>();
   t.ghosts_pruned = j.value("ghosts_pruned", std::size_t{0});  // absent from older checkpoints
+  t.covisible_edges = j.value("covisible_edges", std::size_t{0});  // the same
+  t.covisible_rejected = j.value("covisible_rejected", std::size_t{0});
   t.iterations = j.at("iterations").get<std::size_t>();
   t.last_loss = j.at("last_loss").get<double>();
   t.mapping_ms = j.at("mapping_ms").get<double>();
@@ -271,7 +274,9 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                        {"totals", totals_to_json(s.totals)},
                        {"edges", edges_to_json(s.edges)},
                        {"loop_events", loop_events_to_json(s.loop_events)},
-                       {"tracker_correction", pose_to_json(s.tracker_correction)}};
+                       {"tracker_correction", pose_to_json(s.tracker_correction)},
+                       {"covisible", s.covisible},
+                       {"covisible_rates", s.covisible_rates}};
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
@@ -315,6 +320,9 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     c.slam.edges = edges_from_json(header.at("edges"));
     c.slam.loop_events = loop_events_from_json(header.at("loop_events"));
     c.slam.tracker_correction = pose_from_json(header.at("tracker_correction"));
+    // Checkpoints from before covisibility continue with none (it links the next keyframes).
+    c.slam.covisible = header.value("covisible", std::vector<std::size_t>{});
+    c.slam.covisible_rates = header.value("covisible_rates", std::vector<double>{});
   } catch (const json::exception& e) {
     fail(path, std::string("malformed checkpoint header: ") + e.what());
   } catch (const splat::Error& e) {

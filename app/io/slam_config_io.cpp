@@ -44,6 +44,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"loop_closure", "enabled", &c.loop_closure.enabled},
       {"loop_closure", "min_separation", &c.loop_closure.min_separation},
       {"loop_closure", "dense_width", &c.loop_closure.dense_width},
+      {"loop_closure", "covisible_keyframes", &c.loop_closure.covisible_keyframes},
       {"loop_closure", "features", &c.loop_closure.places.features},
       {"loop_closure", "max_hamming", &c.loop_closure.places.max_hamming},
       {"loop_closure", "ratio", &c.loop_closure.places.ratio},

@@ -94,8 +94,7 @@ Eigen::Vector3d FrameTracker::angular_velocity() const {
 
 bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_world_reference,
                          const Eigen::Isometry3d& guess, FrameRecord& record) const {
-  tracking::OdometryConfig odometry = config_.odometry;
-  odometry.exposure = exposure_.exposure();
+  tracking::OdometryConfig odometry = odometry_config();
   odometry.depth_weight =
       tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm(), reference.angular_rate);
   const tracking::OdometryResult r =
@@ -256,6 +255,18 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   if (config_.front_end != "odometry") return;
   references_.push_front({last_prepared_, number, angular_velocity().norm()});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
+}
+
+FrameTracker::PreparedKeyframe FrameTracker::newest_reference() const {
+  if (references_.empty()) return {};
+  const Reference& r = references_.front();
+  return {r.frame, r.keyframe, r.angular_rate};
+}
+
+tracking::OdometryConfig FrameTracker::odometry_config() const {
+  tracking::OdometryConfig odometry = config_.odometry;
+  odometry.exposure = exposure_.exposure();
+  return odometry;
 }
 
 void FrameTracker::relocalized(const FrameRecord& record) {

@@ -75,6 +75,16 @@ class FrameTracker {
   // through the rasterizer against the map, from the odometry's estimate.
   void refine_keyframe(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
   void keyframe_added(const FrameRecord& record, std::size_t number);
+  // The newest reference keyframe as tracking prepared it (moving regions left out), with its
+  // angular rate, and the odometry settings tracking aligns with now (its exposure estimate):
+  // what the back end needs to align keyframes with each other. Odometry front end only.
+  struct PreparedKeyframe {
+    std::shared_ptr<const tracking::OdometryFrame> frame;
+    std::size_t keyframe = 0;
+    double angular_rate = 0;
+  };
+  PreparedKeyframe newest_reference() const;
+  tracking::OdometryConfig odometry_config() const;
   // The last tracked frame's moving regions (tracking::MovingLabel per pixel of
   // tracking::moving_level(), moving_factor() times smaller than the frame), or empty: none found.
   const std::vector<uint8_t>& moving_labels() const { return moving_; }

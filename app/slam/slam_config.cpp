@@ -23,6 +23,7 @@ void SlamConfig::validate() const {
   check.at_least("mapping_backlog_mib", mapping_backlog_mib, 0.0);
   check.at_least("loop_closure.min_separation", loop_closure.min_separation, 1);
   check.at_least("loop_closure.dense_width", loop_closure.dense_width, 16);
+  check.at_least("loop_closure.covisible_keyframes", loop_closure.covisible_keyframes, 0);
   const tracking::PlaceRecognitionConfig& p = loop_closure.places;
   check.at_least("loop_closure.features", p.features, 10);
   check.in_range("loop_closure.max_hamming", p.max_hamming, 0, 256);

@@ -184,14 +184,80 @@ void SlamSystem::close_loops(const KeyframeJob& job) {
     loop_events_.push_back(event);
     if (!event.accepted) return;
     edges_.push_back(loop);
-    // Keyframes tracking added while the graph was solved (threaded) follow the last solved one.
-    std::vector<Eigen::Isometry3d> correction(keyframe_world_.size());
-    for (std::size_t k = 0; k < keyframe_world_.size(); ++k) {
-      correction[k] = k < poses.size() ? solved.poses[k] * poses[k].inverse() : correction[poses.size() - 1];
-      keyframe_world_[k] = splat::orthonormalized(correction[k] * keyframe_world_[k]);
+    mapper_corrections = move_keyframes(poses, solved.poses);
+  }
+  mapper_.correct_keyframes(mapper_corrections);
+}
+
+std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eigen::Isometry3d>& before,
+                                                          const std::vector<Eigen::Isometry3d>& solved) {
+  // Keyframes tracking added while the graph was solved (threaded) follow the last solved one.
+  std::vector<Eigen::Isometry3d> correction(keyframe_world_.size());
+  for (std::size_t k = 0; k < keyframe_world_.size(); ++k) {
+    correction[k] = k < before.size() ? solved[k] * before[k].inverse() : correction[before.size() - 1];
+    keyframe_world_[k] = splat::orthonormalized(correction[k] * keyframe_world_[k]);
+  }
+  tracker_correction_ = correction.back() * tracker_correction_;
+  std::vector<Eigen::Isometry3d> mapper_corrections;
+  for (std::size_t k : mapper_keyframes_) mapper_corrections.push_back(correction[k]);
+  return mapper_corrections;
+}
+
+void SlamSystem::link_covisible(const KeyframeJob& job) {
+  const int wanted = config_.loop_closure.covisible_keyframes;
+  if (wanted <= 0 || !job.prepared.frame) return;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<tracking::PoseGraphEdge> edges;
+  {
+    std::lock_guard lock(mutex_);
+    poses = keyframe_world_;
+    edges = edges_;
+  }
+  const tracking::PoseGraphConfig& graph = config_.loop_closure.graph;
+  std::vector<tracking::PoseGraphEdge> added;
+  std::size_t rejected = 0;
+  for (const FrameTracker::PreparedKeyframe& earlier : covisible_) {
+    const std::size_t i = earlier.keyframe, j = job.keyframe;
+    if (i >= j || std::any_of(edges.begin(), edges.end(), [&](const auto& e) { return e.i == i && e.j == j; })) continue;
+    tracking::OdometryConfig odometry = job.odometry;
+    odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *job.prepared.frame, job.prepared.angular_rate,
+                                                              earlier.angular_rate);
+    const tracking::OdometryResult r =
+        tracking::align_rgbd(*earlier.frame, *job.prepared.frame, poses[j].inverse() * poses[i], odometry);
+    if (!r.converged) {
+      ++rejected;
+      continue;
     }
-    tracker_correction_ = correction.back() * tracker_correction_;
-    for (std::size_t k : mapper_keyframes_) mapper_corrections.push_back(correction[k]);
+    tracking::PoseGraphEdge edge;
+    edge.i = i, edge.j = j;
+    edge.T_i_j = r.T_cur_ref.inverse();
+    // An alignment far from where the chain puts the pair found another minimum: left out.
+    const Eigen::Isometry3d disagreement = (poses[i].inverse() * poses[j]).inverse() * edge.T_i_j;
+    if (disagreement.translation().norm() > graph.drift_floor_m ||
+        Eigen::AngleAxisd(disagreement.linear()).angle() * 180 / M_PI > graph.drift_floor_deg) {
+      ++rejected;
+      continue;
+    }
+    edge.information = edge_information(r.information);
+    added.push_back(edge);
+  }
+  covisible_.push_back(job.prepared);
+  covisible_.back().keyframe = job.keyframe;
+  // Its reference among them already has its edge: `wanted` besides it.
+  while (covisible_.size() > static_cast<std::size_t>(wanted) + 1) covisible_.pop_front();
+  {
+    std::lock_guard lock(mutex_);
+    totals_.covisible_edges += added.size();
+    totals_.covisible_rejected += rejected;
+  }
+  if (added.empty()) return;
+  edges.insert(edges.end(), added.begin(), added.end());
+  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, graph);
+  std::vector<Eigen::Isometry3d> mapper_corrections;
+  {
+    std::lock_guard lock(mutex_);
+    edges_.insert(edges_.end(), added.begin(), added.end());
+    mapper_corrections = move_keyframes(poses, solved.poses);
   }
   mapper_.correct_keyframes(mapper_corrections);
 }
@@ -211,6 +277,7 @@ double SlamSystem::map_keyframe(const KeyframeJob& job) {
   mapper_keyframes_.push_back(job.keyframe);  // the mapper numbers keyframes in the order added
   const mapping::MappingStats stats = mapper_.add_keyframe(job.frame, job.T_world_cam.inverse());
   if (config_.loop_closure.enabled && config_.front_end == "odometry") close_loops(job);
+  if (config_.front_end == "odometry") link_covisible(job);
   auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
   const auto poses = mapper_.keyframe_poses();
   const double ms = ms_since(start);
@@ -298,7 +365,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   {
     std::lock_guard lock(mutex_);
     if (record.keyframe) {
-      job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size()};
+      job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size(), {}, {}};
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
@@ -312,6 +379,10 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
     }
   }
   if (job && job->keyframe > 0) tracker_.keyframe_added(record, job->keyframe);
+  if (job && config_.front_end == "odometry") {
+    job->prepared = tracker_.newest_reference();
+    job->odometry = tracker_.odometry_config();
+  }
   if (threaded_ && !thread_.joinable()) thread_ = std::thread([this] { mapping_loop(); });
   // The render front end tracks against the map: the first keyframe seeds it before anything
   // is tracked. The odometry needs no map, so threaded it maps even the first in the background.
@@ -348,8 +419,13 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
 SlamSystem::State SlamSystem::state() {
   wait_for_mapping();
   std::lock_guard lock(mutex_);
-  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
-          edges_,           loop_events_,     tracker_correction_};
+  State s{tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
+          edges_,           loop_events_,     tracker_correction_, {}, {}};
+  for (const FrameTracker::PreparedKeyframe& k : covisible_) {
+    s.covisible.push_back(k.keyframe);
+    s.covisible_rates.push_back(k.angular_rate);
+  }
+  return s;
 }
 
 void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
@@ -380,6 +456,16 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   };
   for (const tracking::PoseGraphEdge& e : s.edges) {
     if (e.i >= keyframe_frame.size() || e.j >= keyframe_frame.size()) inconsistent("a pose graph edge names a keyframe that does not exist");
+  }
+  if (s.covisible_rates.size() != s.covisible.size() ||
+      s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
+    inconsistent(std::to_string(s.covisible.size()) + " covisible keyframes with " + std::to_string(s.covisible_rates.size()) +
+                 " rates");
+  }
+  for (std::size_t k = 0; k < s.covisible.size(); ++k) {
+    // Prepared as tracking prepares a reference it restores (tracker_.restore).
+    covisible_.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(s.covisible[k]), config_.odometry),
+                          s.covisible[k], s.covisible_rates[k]});
   }
   tracker_.restore(s.tracker, keyframe);
   std::lock_guard places_lock(places_mutex_);

@@ -49,6 +49,9 @@ struct MappingTotals {
   std::size_t keyframes_caught_up = 0;  // of those, mapped later by catch_up_mapping()
   std::size_t gaussians_added = 0, gaussians_pruned = 0;
   std::size_t ghosts_pruned = 0;  // of all the run removed, the final sweep's included
+  // Covisibility: keyframe-to-keyframe alignments added to the pose graph, and those left out
+  // (not converged, or far from where the graph put the pair).
+  std::size_t covisible_edges = 0, covisible_rejected = 0;
   std::size_t iterations = 0;
   double last_loss = 0;  // the last window step's loss
   double mapping_ms = 0;
@@ -136,6 +139,10 @@ class SlamSystem {
     std::vector<tracking::PoseGraphEdge> edges;  // the keyframe pose graph's edges
     std::vector<LoopEvent> loop_events;
     Eigen::Isometry3d tracker_correction = Eigen::Isometry3d::Identity();  // not yet applied
+    // The recent keyframes new ones are aligned against (covisibility), oldest first, and the
+    // angular rates they were taken at.
+    std::vector<std::size_t> covisible;
+    std::vector<double> covisible_rates;
   };
   // The state between two frames (threaded: once mapping is idle).
   State state();
@@ -149,12 +156,24 @@ class SlamSystem {
     splat::RgbdFrame frame;
     Eigen::Isometry3d T_world_cam;
     std::size_t keyframe;  // its number among the system's keyframes
+    // Odometry: the keyframe as tracking prepared it, and tracking's settings then (covisibility).
+    FrameTracker::PreparedKeyframe prepared;
+    tracking::OdometryConfig odometry;
   };
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
   // Loop closure for a keyframe just mapped (the mapping thread's): place recognition against
   // earlier keyframes, the pose graph, and the keyframes and the map moved to its solution.
   void close_loops(const KeyframeJob& job);
+  // Covisibility for a keyframe just mapped: dense alignments against the recent keyframes
+  // besides its reference, and the pose graph solved with them.
+  void link_covisible(const KeyframeJob& job);
+  // Moves every keyframe (and with them the map and tracking's motion model) from `before`
+  // (the poses the graph was solved from) to `solved`; the caller holds mutex_ and calls
+  // mapper_.correct_keyframes with what it returns once it has released it.
+  std::vector<Eigen::Isometry3d> move_keyframes(const std::vector<Eigen::Isometry3d>& before,
+                                                const std::vector<Eigen::Isometry3d>& solved);
+  std::deque<FrameTracker::PreparedKeyframe> covisible_;  // the mapping thread's: recent keyframes
   std::size_t frame_of_keyframe(std::size_t keyframe) const;  // caller holds mutex_
   // A frame's place among the mapped keyframes: the best verified match, densely aligned.
   struct Placement {
