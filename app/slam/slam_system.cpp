@@ -203,6 +203,43 @@ std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eige
   return mapper_corrections;
 }
 
+namespace {
+
+// The pose graph solved for the keyframes from `first` on alone, with every keyframe outside
+// them that an edge links them to held where it is: the cost stays that of the window however
+// long the run (loops solve the whole graph). The poses of all keyframes, the others unmoved.
+std::vector<Eigen::Isometry3d> solve_window(const std::vector<Eigen::Isometry3d>& poses,
+                                            const std::vector<tracking::PoseGraphEdge>& edges, std::size_t first,
+                                            const tracking::PoseGraphConfig& config) {
+  std::vector<std::size_t> node(poses.size(), poses.size());  // keyframe -> window node
+  std::vector<std::size_t> keyframe;                          // window node -> keyframe
+  std::vector<std::size_t> fixed;
+  const auto add = [&](std::size_t k, bool hold) {
+    if (node[k] != poses.size()) return;
+    node[k] = keyframe.size();
+    keyframe.push_back(k);
+    if (hold) fixed.push_back(node[k]);
+  };
+  for (std::size_t k = first; k < poses.size(); ++k) add(k, k == 0);
+  std::vector<tracking::PoseGraphEdge> window;
+  for (const tracking::PoseGraphEdge& e : edges) {
+    if (e.i < first && e.j < first) continue;
+    add(e.i, true), add(e.j, true);  // a neighbour outside the window: held
+    tracking::PoseGraphEdge w = e;
+    w.i = node[e.i], w.j = node[e.j];
+    window.push_back(w);
+  }
+  if (fixed.empty()) fixed.push_back(node[first]);  // nothing links the window to the rest: its first holds it
+  std::vector<Eigen::Isometry3d> initial;
+  for (std::size_t k : keyframe) initial.push_back(poses[k]);
+  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(initial, window, fixed, config);
+  std::vector<Eigen::Isometry3d> out = poses;
+  for (std::size_t n = 0; n < keyframe.size(); ++n) out[keyframe[n]] = solved.poses[n];
+  return out;
+}
+
+}  // namespace
+
 void SlamSystem::link_covisible(const KeyframeJob& job) {
   const int wanted = config_.loop_closure.covisible_keyframes;
   if (wanted <= 0 || !job.prepared.frame) return;
@@ -252,12 +289,14 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
   }
   if (added.empty()) return;
   edges.insert(edges.end(), added.begin(), added.end());
-  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, graph);
+  std::size_t oldest = job.keyframe;
+  for (const FrameTracker::PreparedKeyframe& k : covisible_) oldest = std::min(oldest, k.keyframe);
+  const std::vector<Eigen::Isometry3d> solved = solve_window(poses, edges, oldest, graph);
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
     edges_.insert(edges_.end(), added.begin(), added.end());
-    mapper_corrections = move_keyframes(poses, solved.poses);
+    mapper_corrections = move_keyframes(poses, solved);
   }
   mapper_.correct_keyframes(mapper_corrections);
 }
