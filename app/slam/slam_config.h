@@ -28,9 +28,10 @@ struct LoopClosureConfig {
   // Covisibility (odometry front end, whether loops are closed or not): each mapped keyframe is
   // also aligned densely, at the tracking resolution, against this many earlier keyframes
   // besides its reference, the most recent ones, and the pose graph is solved again with those
-  // edges too. 0: keyframes are chained by their reference edges alone until a loop closes.
-  // Measured on every real and generated sequence (docs/tuning.md, "Covisibility").
-  int covisible_keyframes = 4;
+  // edges too. 0 (off): keyframes are chained by their reference edges alone until a loop
+  // closes. 4 halves the drift on the generated sequences but made teddy worse and cost 7-Scenes
+  // 0.6 dB held out; 1 still cost 7-Scenes 0.15 dB (docs/tuning.md, "Covisibility").
+  int covisible_keyframes = 0;
 };
 
 struct SlamConfig {

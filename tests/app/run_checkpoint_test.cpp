@@ -15,8 +15,9 @@
 
 namespace {
 
-// Small enough to run in a second, long enough that keyframes leave the mapper's store and the
-// tracker's references, and that mapping moves keyframes (its pose Adam state matters).
+// Small enough to run in a second, long enough that keyframes leave the mapper's store, the
+// tracker's references and covisibility's recent keyframes, and that mapping moves keyframes
+// (its pose Adam state matters).
 app::SlamConfig checkpoint_config() {
   app::SlamConfig config;
   config.mapping.iterations = 6;
@@ -25,6 +26,7 @@ app::SlamConfig checkpoint_config() {
   config.mapping.pose_rotation_learning_rate = 5e-5;
   config.keyframe_every = 2;
   config.refine_passes = 2;
+  config.loop_closure.covisible_keyframes = 2;  // its recent keyframes are part of the state
   return config;
 }
 
