@@ -25,12 +25,12 @@ struct LoopClosureConfig {
   int dense_width = 160;
   tracking::PlaceRecognitionConfig places;
   tracking::PoseGraphConfig graph;
-  // Covisibility (odometry front end, whether loops are closed or not): each mapped keyframe is
-  // also aligned densely, at the tracking resolution, against this many earlier keyframes
-  // besides its reference, the most recent ones, and the pose graph is solved again with those
-  // edges too. 0 (off): keyframes are chained by their reference edges alone until a loop
-  // closes. 4 halves the drift on the generated sequences but made teddy worse and cost 7-Scenes
-  // 0.6 dB held out; 1 still cost 7-Scenes 0.15 dB (docs/tuning.md, "Covisibility").
+  // Covisibility (odometry front end, whether loops are closed or not): each mapped keyframe
+  // blurred by odometry.blur_scale_px or more is also aligned densely, at the tracking
+  // resolution, against this many earlier keyframes besides its reference, the most recent ones,
+  // and the pose graph over them is solved again with those edges. 0 (off): keyframes are
+  // chained by their reference edges alone until a loop closes. 4 halves the drift of the
+  // generated blurred sequences, but cost 7-Scenes 0.5 dB held out (docs/tuning.md, "Covisibility").
   int covisible_keyframes = 0;
 };
 

@@ -253,7 +253,13 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
   const tracking::PoseGraphConfig& graph = config_.loop_closure.graph;
   std::vector<tracking::PoseGraphEdge> added;
   std::size_t rejected = 0;
-  for (const FrameTracker::PreparedKeyframe& earlier : covisible_) {
+  // Only a blurred keyframe (blur_scale_px or more at the finest level): its reference edge is
+  // then the weak link, colour lying under blur. A sharp keyframe is measured best by its
+  // reference: on teddy the longer baselines' edges made sharp keyframes worse.
+  const tracking::OdometryFrame::Level& finest = job.prepared.frame->levels().back();
+  const double blur_px = finest.fx * job.prepared.angular_rate * job.odometry.exposure;
+  const bool sharp = blur_px < job.odometry.blur_scale_px;
+  for (const FrameTracker::PreparedKeyframe& earlier : sharp ? decltype(covisible_){} : covisible_) {
     const std::size_t i = earlier.keyframe, j = job.keyframe;
     if (i >= j || std::any_of(edges.begin(), edges.end(), [&](const auto& e) { return e.i == i && e.j == j; })) continue;
     tracking::OdometryConfig odometry = job.odometry;

@@ -26,7 +26,9 @@ app::SlamConfig checkpoint_config() {
   config.mapping.pose_rotation_learning_rate = 5e-5;
   config.keyframe_every = 2;
   config.refine_passes = 2;
-  config.loop_closure.covisible_keyframes = 2;  // its recent keyframes are part of the state
+  // Covisibility's recent keyframes are part of the state; a blur scale of 0 links every keyframe.
+  config.loop_closure.covisible_keyframes = 2;
+  config.odometry.blur_scale_px = 0;
   return config;
 }
 
@@ -53,6 +55,7 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
     for (std::size_t i = stop; i < dataset.entries.size(); ++i) slam->process(load(i));
   }
   slam->refine_map(load);
+  EXPECT_GT(slam->mapping_totals().covisible_edges, 0u);
   return {slam->trajectory(), *slam->map()};
 }
 
