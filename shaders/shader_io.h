@@ -135,6 +135,16 @@ struct AdamParams {
 
 // The free-space test of Gaussian centres against a stored frame's depth (free_space_test.comp;
 // ResidentMap::free_space_test). Codes, 2 bits per Gaussian, 16 per word:
+// Densification's coverage test (coverage_*.comp): the median depth error by radix selection,
+// kCoverageBits bits a pass from the top; its state words, and the key of a pixel with no error.
+GSLAM_CONST uint kCoverageBits = 8u;
+GSLAM_CONST uint kCoverageBins = 256u;
+GSLAM_CONST uint kCoverageNoError = 0xffffffffu;
+GSLAM_CONST uint kCoverageCount = 0u;   // errors counted
+GSLAM_CONST uint kCoveragePrefix = 1u;  // the median's bits chosen so far
+GSLAM_CONST uint kCoverageRank = 2u;    // its rank among the errors that match the prefix
+GSLAM_CONST uint kCoverageSelectWords = 4u;
+
 GSLAM_CONST uint kFreeSpaceNone = 0u;     // no verdict: off the image, too near, a neighbour unmeasured
 GSLAM_CONST uint kFreeSpaceThrough = 1u;  // every depth around it is farther by more than the margin
 GSLAM_CONST uint kFreeSpaceOn = 2u;       // a depth around it is within the margin

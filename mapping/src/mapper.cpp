@@ -85,26 +85,32 @@ void Mapper::push_to_device() {
 }
 
 
-std::size_t Mapper::densify(const splat::RgbdFrame& f, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
-                            std::size_t anchor) {
+std::size_t Mapper::densify(const splat::RgbdFrame& f, uint64_t device_key, const Eigen::Isometry3d& T_cam_world,
+                            bool fill_holes, std::size_t anchor) {
   std::vector<float> mask(f.depth.size(), 1.f);
-  if (size() > 0) {
+  // In float, as the device's test (splat::ResidentMap::coverage_mask) computes it.
+  const float densify_alpha = static_cast<float>(config_.densify_alpha);
+  const float depth_error_factor = static_cast<float>(config_.depth_error_factor), min_median = 1e-3f;
+  if (size() > 0 && device_) {
     const splat::Camera camera = splat::posed(f.camera, T_cam_world);
-    const splat::ForwardResult render =
-        device_ ? device_->render(camera, splat::images_only(), true) : rasterizer_.forward(map_, camera, splat::images_only());
+    const std::vector<uint8_t> seed = device_->coverage_mask(device_key, camera, {densify_alpha, depth_error_factor, min_median});
+    for (std::size_t p = 0; p < mask.size(); ++p) mask[p] = seed[p];
+  } else if (size() > 0) {
+    const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, T_cam_world), splat::images_only());
     std::vector<float> errors;
     for (std::size_t p = 0; p < f.depth.size(); ++p) {
-      if (f.depth[p] > 0 && render.alpha[p] > config_.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));
+      if (f.depth[p] > 0 && render.alpha[p] > densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - f.depth[p]));
     }
     float median = 0;
     if (!errors.empty()) {
       std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
       median = errors[errors.size() / 2];
     }
+    const float threshold = depth_error_factor * std::max(median, min_median);
     for (std::size_t p = 0; p < mask.size(); ++p) {
-      const bool uncovered = render.alpha[p] < config_.densify_alpha;
+      const bool uncovered = render.alpha[p] < densify_alpha;
       // Something measured in front of the map that the map does not have.
-      const bool in_front = f.depth[p] > 0 && render.depth_normalized[p] - f.depth[p] > config_.depth_error_factor * std::max(median, 1e-3f);
+      const bool in_front = f.depth[p] > 0 && render.depth_normalized[p] - f.depth[p] > threshold;
       mask[p] = uncovered || in_front ? 1.f : 0.f;
     }
   }
@@ -386,7 +392,9 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
   if (size() == 0) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
   if (device_) device_->set_target(kRefineTarget, kf.frame);
-  if (densify_first) densify(kf.frame, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
+  if (densify_first) {
+    densify(kf.frame, kRefineTarget, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
+  }
   double loss = 0;
   for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
   T_cam_world = kf.T_cam_world;
@@ -516,7 +524,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   } else {
     observe_free_space(newest.frame, newest.T_cam_world);
   }
-  stats.added = densify(newest.frame, newest.T_cam_world, false, newest.number);
+  stats.added = densify(newest.frame, newest.number, newest.T_cam_world, false, newest.number);
   const std::vector<Keyframe*> window = window_for(newest);
   stats.window = window.size();
   // Half the steps on the new keyframe, the rest spread over the window at random.

@@ -189,6 +189,48 @@ TEST(ResidentMap, FreeSpaceAndPruningTestsGiveTheHostsVerdicts) {
   EXPECT_LT(flagged, s.gaussians.size() / 2);
 }
 
+// Densification's coverage test on the device against the host's, computed from the device's
+// own render of the map: the median depth error (radix selection on the device) and the mask.
+// The target is another scene, so the map covers some pixels, misses others, and lies behind
+// the measured depth at some.
+TEST(ResidentMap, CoverageMaskGivesTheHostsMask) {
+  GSLAM_REQUIRE_RESIDENT(device, rasterizer, 1);
+  const gslam::test::Scene<float> s = scene(300, 64, 48, 7);
+  splat::RgbdFrame frame = target_frame(rasterizer, s.camera, 400);
+  frame.ignore.assign(frame.depth.size(), 0);
+  for (std::size_t p = 0; p < frame.ignore.size(); p += 11) frame.ignore[p] = 1;
+  device->assign(s.gaussians, nullptr);
+  device->set_target(3, frame);
+  const splat::ResidentMap::CoverageTest test{0.5f, 2.0f, 1e-3f};
+  const std::vector<uint8_t> mask = device->coverage_mask(3, s.camera, test);
+  const splat::ForwardResult render = device->render(s.camera, splat::images_only(), true);
+  ASSERT_EQ(mask.size(), frame.depth.size());
+  std::vector<float> errors;
+  for (std::size_t p = 0; p < frame.depth.size(); ++p) {
+    if (frame.depth[p] > 0 && render.alpha[p] > test.densify_alpha) errors.push_back(std::abs(render.depth_normalized[p] - frame.depth[p]));
+  }
+  ASSERT_GT(errors.size(), 100u) << "the map covers measured pixels";
+  std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
+  const float threshold = test.depth_error_factor * std::max(errors[errors.size() / 2], test.min_median);
+  std::size_t uncovered = 0, in_front = 0, differ = 0, seeded = 0;
+  for (std::size_t p = 0; p < mask.size(); ++p) {
+    const bool open = render.alpha[p] < test.densify_alpha;
+    const bool front = frame.depth[p] > 0 && render.depth_normalized[p] - frame.depth[p] > threshold;
+    const bool want = (open || front) && !frame.ignore[p];
+    uncovered += open && !frame.ignore[p];
+    in_front += front && !open && !frame.ignore[p];
+    differ += bool(mask[p]) != want;
+    seeded += want;
+  }
+  EXPECT_GT(uncovered, 50u) << "the map leaves pixels uncovered";
+  EXPECT_GT(in_front, 20u) << "and lies behind the measured depth at others";
+  EXPECT_LT(seeded, mask.size() * 9 / 10) << "but not everywhere";
+  // Exactly, but for a pixel whose error lies exactly at the threshold (the host's compiler may
+  // fuse the subtraction into the comparison): at most one in 500.
+  EXPECT_LE(differ, mask.size() / 500) << differ << " of " << mask.size() << " pixels differ";
+  EXPECT_THROW(device->coverage_mask(4, s.camera, test), splat::Error) << "no frame stored under 4";
+}
+
 // The step on the device against the same step on the host: the backend's forward and
 // backward of the host's map, the CPU losses and splat::adam_update.
 TEST(ResidentMap, StepMatchesTheHostLoopAndMovesOnlyScalars) {

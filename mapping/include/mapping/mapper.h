@@ -180,9 +180,10 @@ class Mapper {
     PoseAdam pose = {};
   };
   // Seeds Gaussians where the frame (at its pose) sees what the map lacks, and with
-  // `fill_holes` where it has no depth too; returns how many.
-  std::size_t densify(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, bool fill_holes,
-                      std::size_t anchor);
+  // `fill_holes` where it has no depth too; returns how many. On the device the coverage test
+  // runs there, against the frame stored under `device_key`.
+  std::size_t densify(const splat::RgbdFrame& frame, uint64_t device_key, const Eigen::Isometry3d& T_cam_world,
+                      bool fill_holes, std::size_t anchor);
   std::vector<Keyframe*> window_for(Keyframe& newest);
   // One Adam step of the map on a keyframe. Window steps also move the keyframe's pose (but
   // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose

@@ -82,6 +82,17 @@ class ResidentMap {
   };
   virtual std::vector<FreeSpace> free_space_test(uint64_t key, const Camera& camera, std::size_t first,
                                                  const FreeSpaceTest& test) = 0;
+  // Densification's coverage test of the map seen from `camera` against the frame stored under
+  // `key` (its size): per pixel 1 where the map should be seeded there, that is where the
+  // render's alpha is below densify_alpha, or where the measured depth lies in front of the
+  // rendered depth (depth_normalized) by more than depth_error_factor x the median of
+  // |rendered - measured| over the measured pixels the render covers (alpha above
+  // densify_alpha), that median taken as at least min_median; 0 on ignored pixels. In float.
+  // Only the mask crosses the bus, a bit a pixel. Throws splat::Error for an empty map.
+  struct CoverageTest {
+    float densify_alpha = 0, depth_error_factor = 0, min_median = 0;  // the caller's (mapping's) values
+  };
+  virtual std::vector<uint8_t> coverage_mask(uint64_t key, const Camera& camera, const CoverageTest& test) = 0;
   // Per Gaussian, 1 where its opacity logit is below min_opacity_logit or its largest log scale
   // above max_log_scale: pruning's test.
   virtual std::vector<uint8_t> faint_or_oversized(float min_opacity_logit, float max_log_scale) = 0;

@@ -47,6 +47,7 @@ class RasterizerCore {
     const Buffer* rgb = nullptr;    // [H, W, 3]
     const Buffer* alpha = nullptr;  // [H, W]
     const Buffer* depth = nullptr;  // [H, W], alpha-weighted
+    const Buffer* depth_normalized = nullptr;  // [H, W], depth / alpha where alpha > 0
   };
   virtual Images images(const std::shared_ptr<void>& frame) = 0;
   // Records the backward pass from image gradients on the device and the download of the sums

@@ -11,6 +11,10 @@
 #include "adam_spv.h"
 #include "compact_flags_spv.h"
 #include "compact_spv.h"
+#include "coverage_errors_spv.h"
+#include "coverage_histogram_spv.h"
+#include "coverage_mask_spv.h"
+#include "coverage_select_spv.h"
 #include "free_space_test_spv.h"
 #include "prune_flags_spv.h"
 #include "shader_io.h"
@@ -71,12 +75,19 @@ class VulkanResidentMap final : public ResidentMap {
         compact_(context_, kCompactSpv, 4, "compact"),
         free_space_(context_, kFreeSpaceTestSpv, 5, "free_space_test"),
         prune_flags_(context_, kPruneFlagsSpv, 3, "prune_flags"),
+        coverage_errors_(context_, kCoverageErrorsSpv, 5, "coverage_errors"),
+        coverage_histogram_(context_, kCoverageHistogramSpv, 3, "coverage_histogram"),
+        coverage_select_(context_, kCoverageSelectSpv, 2, "coverage_select"),
+        coverage_mask_(context_, kCoverageMaskSpv, 6, "coverage_mask"),
         loss_(context_),
         adam_params_(context_),
         keep_bits_(context_),
         offsets_(context_),
         test_params_(context_),
         verdicts_(context_),
+        coverage_keys_(context_),
+        coverage_select_state_(context_),
+        coverage_histogram_bins_(context_),
         d_rgb_(context_),
         d_alpha_(context_),
         d_depth_(context_) {
@@ -223,6 +234,47 @@ class VulkanResidentMap final : public ResidentMap {
     std::vector<FreeSpace> codes(tested);
     for (std::size_t j = 0; j < tested; ++j) codes[j] = FreeSpace((packed[j / 16] >> (j % 16 * 2)) & 3u);
     return codes;
+  }
+
+  std::vector<uint8_t> coverage_mask(uint64_t key, const Camera& camera, const CoverageTest& test) override {
+    if (count_ == 0) throw Error("resident map: coverage test of an empty map");
+    const Target& t = target(key, camera);
+    auto lock = core_.lock();
+    CommandBatch& batch = core_.batch();
+    DiscardOnThrow guard(batch);
+    // At most kMaxTargetPixels (set_target): the mask shader's pixel count leaves its top bit free.
+    const std::size_t pixels = std::size_t(t.width) * t.height, words = (pixels + 31) / 32;
+    const std::shared_ptr<void> frame =
+        core_.render(device_map(), camera, RenderSettings{}, nullptr, RasterizerCore::Download::kNone);
+    const RasterizerCore::Images images = core_.images(frame);
+    coverage_keys_.reserve(pixels * 4);
+    coverage_select_state_.reserve(io::kCoverageSelectWords * 4);
+    coverage_histogram_bins_.reserve(io::kCoverageBins * 4);
+    verdicts_.reserve(words * 4);
+    batch.fill_zero(coverage_select_state_, io::kCoverageSelectWords * 4);
+    batch.fill_zero(coverage_histogram_bins_, io::kCoverageBins * 4);
+    batch.fill_zero(verdicts_, words * 4);
+    const uint32_t n = uint32_t(pixels), alpha = std::bit_cast<uint32_t>(test.densify_alpha);
+    batch.dispatch(coverage_errors_, {images.alpha, images.depth_normalized, &t.depth, &coverage_keys_, &coverage_select_state_},
+                   {n, alpha}, groups_for(pixels));
+    // The median by radix selection, from the top bits down; it never leaves the device.
+    for (int shift = 32 - int(io::kCoverageBits); shift >= 0; shift -= int(io::kCoverageBits)) {
+      batch.dispatch(coverage_histogram_, {&coverage_keys_, &coverage_select_state_, &coverage_histogram_bins_},
+                     {n, uint32_t(shift)}, groups_for(pixels));
+      batch.dispatch(coverage_select_, {&coverage_select_state_, &coverage_histogram_bins_}, {uint32_t(shift)}, 1);
+    }
+    batch.dispatch(coverage_mask_,
+                   {images.alpha, images.depth_normalized, &t.depth, t.ignoring ? &t.ignore : &t.depth,
+                    &coverage_select_state_, &verdicts_},
+                   {n | (t.ignoring ? 0x80000000u : 0u), alpha, std::bit_cast<uint32_t>(test.depth_error_factor),
+                    std::bit_cast<uint32_t>(test.min_median)},
+                   groups_for(pixels));
+    std::vector<uint32_t> packed(words);
+    batch.download(verdicts_, packed.data(), words * 4);
+    batch.run();
+    std::vector<uint8_t> mask(pixels);
+    for (std::size_t p = 0; p < pixels; ++p) mask[p] = uint8_t((packed[p / 32] >> (p % 32)) & 1u);
+    return mask;
   }
 
   std::vector<uint8_t> faint_or_oversized(float min_opacity_logit, float max_log_scale) override {
@@ -451,9 +503,11 @@ class VulkanResidentMap final : public ResidentMap {
   int sh_degree_;
   std::size_t count_ = 0;
   Kernel adam_, compact_flags_, compact_, free_space_, prune_flags_;
+  Kernel coverage_errors_, coverage_histogram_, coverage_select_, coverage_mask_;
   MappingLossKernels loss_;
   std::vector<Buffer> arrays_;  // indexed by Array
   Buffer adam_params_, keep_bits_, offsets_, test_params_, verdicts_;
+  Buffer coverage_keys_, coverage_select_state_, coverage_histogram_bins_;
   Buffer d_rgb_, d_alpha_, d_depth_;
   double pose_sums_[io::kPosePartials] = {};
   std::map<uint64_t, Target> targets_;

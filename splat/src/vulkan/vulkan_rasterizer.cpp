@@ -213,7 +213,7 @@ class VulkanRasterizer final : public Rasterizer, public RasterizerCore {
   }
   Images images(const std::shared_ptr<void>& frame) override {
     const FrameState& s = *std::static_pointer_cast<FrameState>(frame);
-    return {&s.rgb, &s.alpha, &s.depth};
+    return {&s.rgb, &s.alpha, &s.depth, &s.depth_normalized};
   }
   Gradients record_backward(const std::shared_ptr<void>& frame, const Buffer& d_rgb,
                             const Buffer& d_alpha, const Buffer& d_depth,
