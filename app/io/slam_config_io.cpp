@@ -117,6 +117,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"mapping", "refine_vignetting_rate", &m.refine_vignetting_rate},
       {"mapping", "isotropic", &m.isotropic},
       {"mapping", "device_resident", &m.device_resident},
+      {"mapping", "sweep_device_cache_mib", &m.sweep_device_cache_mib},
       {"mapping", "densify_alpha", &m.densify_alpha},
       {"mapping", "depth_error_factor", &m.depth_error_factor},
       {"mapping", "refine_seed_depth_holes", &m.refine_seed_depth_holes},

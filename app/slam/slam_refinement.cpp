@@ -88,13 +88,14 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       }
       Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
       mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
-                     pass < config_.refine_densify_passes);
+                     pass < config_.refine_densify_passes, i);
       T_world_cam[i] = T_cam_world.inverse();
       if (mapper_.size() != published) publish(), published = mapper_.size();
       if (visited) visited(++result.visits, total);
     }
   }
   prune_map();
+  mapper_.release_sweep_frames();
   if (config_.relocalize_iterations > 0) {
     tracking::TrackingConfig t = config_.tracking;
     t.pyramid = {t.pyramid.back()};

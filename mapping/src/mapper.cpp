@@ -14,8 +14,10 @@
 namespace mapping {
 namespace {
 
-// The resident map's key of the frame refine() fits; keyframes are stored under their numbers.
+// The resident map's keys: keyframes are stored under their numbers, the frame refine() fits
+// under kRefineTarget, and the sweep's cached frames under kSweepFrames + their id.
 constexpr uint64_t kRefineTarget = ~uint64_t{0};
+constexpr uint64_t kSweepFrames = uint64_t{1} << 62;
 
 }  // namespace
 
@@ -36,6 +38,7 @@ void MapperConfig::validate(const std::string& prefix) const {
   check.at_least("refine_pose_learning_rate", refine_pose_learning_rate, 0.0);
   check.at_least("refine_pose_rotation_learning_rate", refine_pose_rotation_learning_rate, 0.0);
   check.at_least("refine_vignetting_rate", refine_vignetting_rate, 0.0);
+  check.at_least("sweep_device_cache_mib", sweep_device_cache_mib, 0.0);
   check.in_range("densify_alpha", densify_alpha, 0.0, 1.0);
   check.positive("depth_error_factor", depth_error_factor);
   check.at_least("seed_stride", seed.stride, 1);
@@ -199,9 +202,8 @@ void Mapper::step_vignetting(const std::array<double, 2>& gradient) {
   vignetting_.k2 = k[1];
 }
 
-double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose) {
-  const splat::MappingStepResult result =
-      device_ ? device_step(kf, step == Step::kWindow ? kf.number : kRefineTarget, step) : host_step(kf, step);
+double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key) {
+  const splat::MappingStepResult result = device_ ? device_step(kf, device_key, step) : host_step(kf, step);
   if (step == Step::kRefine && config_.refine_vignetting_rate > 0) step_vignetting(result.d_loss_d_vignetting);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, result.d_loss_d_pose, config_.pose_learning_rate, config_.pose_rotation_learning_rate);
@@ -387,16 +389,40 @@ splat::RgbdFrame Mapper::refinement_frame(const splat::RgbdFrame& frame) const {
   return splat::downsample(frame, config_.refine_resolution_factor);
 }
 
+uint64_t Mapper::store_refinement_frame(const splat::RgbdFrame& frame, std::optional<std::size_t> frame_id) {
+  if (frame_id) {
+    const uint64_t key = kSweepFrames + *frame_id;
+    if (sweep_frames_.count(key)) return key;
+    const double mib = static_cast<double>(frame.rgb.size() + frame.depth.size() + frame.ignore.size()) * 4 / (1 << 20);
+    if (sweep_frames_mib_ + mib <= config_.sweep_device_cache_mib) {
+      device_->set_target(key, frame);
+      sweep_frames_.insert(key);
+      sweep_frames_mib_ += mib;
+      return key;
+    }
+  }
+  device_->set_target(kRefineTarget, frame);
+  return kRefineTarget;
+}
+
+void Mapper::release_sweep_frames() {
+  if (device_) {
+    for (const uint64_t key : sweep_frames_) device_->drop_target(key);
+  }
+  sweep_frames_.clear();
+  sweep_frames_mib_ = 0;
+}
+
 double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                      int iterations, bool densify_first) {
+                      int iterations, bool densify_first, std::optional<std::size_t> frame_id) {
   if (size() == 0) return 0;
   Keyframe kf{refinement_frame, T_cam_world};
-  if (device_) device_->set_target(kRefineTarget, kf.frame);
+  const uint64_t key = device_ ? store_refinement_frame(kf.frame, frame_id) : kRefineTarget;
   if (densify_first) {
-    densify(kf.frame, kRefineTarget, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
+    densify(kf.frame, key, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   }
   double loss = 0;
-  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose);
+  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose, key);
   T_cam_world = kf.T_cam_world;
   return loss;
 }
@@ -531,7 +557,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
   for (int it = 0; it < config_.iterations && size() > 0; ++it) {
     Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
-    stats.final_loss = optimize_step(kf, Step::kWindow, nullptr);
+    stats.final_loss = optimize_step(kf, Step::kWindow, nullptr, kf.number);
     ++stats.iterations;
   }
   const Pruned pruned = prune();

@@ -4,7 +4,9 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
+#include <set>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -84,6 +86,10 @@ struct MapperConfig {
   // the bus per step. false renders the host's map and computes the loss on the host, as the CPU
   // backend always does (the reference).
   bool device_resident = true;
+  // On the device, the final sweep's frames stay stored there after their first visit, up to
+  // this many MiB (a 320x240 frame takes 1.2 MiB): the later passes upload nothing. Beyond it a
+  // frame is uploaded at each visit, as with 0.
+  double sweep_device_cache_mib = 1024;
   // Throws splat::Error naming the first field out of range, as `prefix` + field name.
   void validate(const std::string& prefix = "MapperConfig.") const;
 };
@@ -138,8 +144,12 @@ class Mapper {
   // are first added where the frame sees what the map lacks (as for a keyframe); no pruning.
   // Where `pose` is given (and refine_pose_learning_rate > 0) the frame's pose moves with the map,
   // with that Adam state; otherwise it stays.
+  // `frame_id` names the frame for the device's sweep cache (sweep_device_cache_mib): the same
+  // id must always come with the same frame, until release_sweep_frames().
   double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                int iterations, bool densify = false);
+                int iterations, bool densify = false, std::optional<std::size_t> frame_id = std::nullopt);
+  // Frees the device's copies of the sweep's frames.
+  void release_sweep_frames();
   // An input frame as refine() takes it: at refine_resolution_factor.
   splat::RgbdFrame refinement_frame(const splat::RgbdFrame& frame) const;
   // Counts a view's evidence for each Gaussian being a ghost (MapperConfig::ghost_views): its
@@ -189,7 +199,11 @@ class Mapper {
   // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose
   // where `pose` is given.
   enum class Step { kWindow, kRefine };
-  double optimize_step(Keyframe& kf, Step step, PoseAdam* pose);
+  // `device_key`: where the device stores kf's frame.
+  double optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key);
+  // The device key of a frame refine() fits: its sweep-cache key if stored there (or room is
+  // left to store it), else the one refine frame's, uploaded now.
+  uint64_t store_refinement_frame(const splat::RgbdFrame& frame, std::optional<std::size_t> frame_id);
   // optimize_step's loss on the device map (the target stored under `key`); returns the loss and
   // the pose gradient.
   splat::MappingStepResult device_step(const Keyframe& kf, uint64_t key, Step step);
@@ -218,6 +232,8 @@ class Mapper {
   mutable GaussianAdam adam_;
   std::unique_ptr<splat::ResidentMap> device_;
   mutable bool host_current_ = true, host_adam_current_ = true;
+  std::set<uint64_t> sweep_frames_;  // the sweep's frames stored on the device, by key
+  double sweep_frames_mib_ = 0;
   std::vector<float> device_means_;  // the device map's means while means_cached_
   bool means_cached_ = false;
   std::deque<Keyframe> keyframes_;
