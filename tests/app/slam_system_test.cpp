@@ -45,6 +45,17 @@ std::vector<app::FrameRecord> process_all(app::SlamSystem& slam, const app::Data
   return records;
 }
 
+// The ATE of `poses` (one per record) against the dataset's ground truth.
+double ate_of(const std::vector<Eigen::Isometry3d>& poses, const std::vector<app::FrameRecord>& records,
+              const app::Dataset& dataset) {
+  std::vector<app::StampedPose> estimate, truth;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    estimate.push_back({records[i].timestamp, poses[i]});
+    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+  }
+  return app::evaluate_trajectory(estimate, truth).ate_rmse;
+}
+
 // Every frame of `dataset` processed with `config` (their records), then the trajectory after
 // the final sweep.
 struct Swept {
@@ -149,12 +160,7 @@ TEST(SlamSystem, RelocalizationAfterRefinementKeepsTheTrajectoryClose) {
   config.relocalize_iterations = 5;
   const auto [records, refined] = process_and_sweep(dataset, config);
   EXPECT_TRUE(refined[0].isApprox(records[0].T_world_cam, 0));
-  std::vector<app::StampedPose> estimate, truth;
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    estimate.push_back({records[i].timestamp, refined[i]});
-    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
-  }
-  const double ate = app::evaluate_trajectory(estimate, truth).ate_rmse;
+  const double ate = ate_of(refined, records, dataset);
   std::printf("synthetic, %zu frames, relocalized: ATE %.3f cm\n", records.size(), 100 * ate);
   EXPECT_LT(ate, 0.01);
 }
@@ -416,14 +422,8 @@ double ate_with_loop_closure(const app::Dataset& dataset, bool loop_closure, std
     slam.wait_for_mapping();
   }
   slam.finish();
-  const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
-  std::vector<app::StampedPose> estimate, truth;
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    estimate.push_back({records[i].timestamp, poses[i]});
-    truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
-  }
   events = slam.loop_events();
-  return app::evaluate_trajectory(estimate, truth).ate_rmse;
+  return ate_of(slam.trajectory(), records, dataset);  // keyframes moved since tracking included
 }
 
 // Two laps of the room with a noisy, blurred camera (1.3 rad/s, 1/60 s exposure, 8 mm depth
@@ -474,14 +474,8 @@ TEST(SlamSystem, CovisibleKeyframesReduceDriftUnderBlur) {
     auto rasterizer = splat::make_cpu_rasterizer();
     app::SlamSystem slam(*rasterizer, config);
     const std::vector<app::FrameRecord> records = process_all(slam, dataset);
-    const std::vector<Eigen::Isometry3d> poses = slam.trajectory();
-    std::vector<app::StampedPose> estimate, truth;
-    for (std::size_t i = 0; i < poses.size(); ++i) {
-      estimate.push_back({records[i].timestamp, poses[i]});
-      truth.push_back({records[i].timestamp, *dataset.entries[i].T_world_cam_truth});
-    }
     totals = slam.mapping_totals();
-    return app::evaluate_trajectory(estimate, truth).ate_rmse;
+    return ate_of(slam.trajectory(), records, dataset);  // keyframes moved since tracking included
   };
   app::MappingTotals chained, linked;
   const double alone = ate(0, chained), covisible = ate(4, linked);
