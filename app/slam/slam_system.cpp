@@ -22,8 +22,8 @@ SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
       tracking_rasterizer_(rasterizer),
       tracker_(rasterizer, config_),
       mapper_(rasterizer, config_.mapping),
-      threaded_(false),
-      places_(config_.loop_closure.places) {}
+      back_end_(config_),
+      threaded_(false) {}
 
 SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer& mapping_rasterizer,
                        const SlamConfig& config)
@@ -31,8 +31,8 @@ SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer
       tracking_rasterizer_(tracking_rasterizer),
       tracker_(tracking_rasterizer, config_),
       mapper_(mapping_rasterizer, config_.mapping),
-      threaded_(true),
-      places_(config_.loop_closure.places) {
+      back_end_(config_),
+      threaded_(true) {
   if (&tracking_rasterizer == &mapping_rasterizer) {
     throw splat::Error("SlamSystem: threaded mapping needs a rasterizer of its own, got the tracking one");
   }
@@ -108,83 +108,23 @@ double frame_mib(const splat::RgbdFrame& frame) {
   return static_cast<double>((frame.rgb.size() + frame.depth.size()) * sizeof(float)) / (1 << 20);
 }
 
-// The information of an odometry edge, made positive definite: a direction the alignment could
-// not observe (a flat wall's slide) gets a vanishing weight rather than none.
-Eigen::Matrix<double, 6, 6> edge_information(const Eigen::Matrix<double, 6, 6>& information) {
-  const double scale = std::max(information.trace() / 6, 1.0);
-  return 0.5 * (information + information.transpose()) + 1e-9 * scale * Eigen::Matrix<double, 6, 6>::Identity();
-}
-
 }  // namespace
 
-splat::RgbdFrame SlamSystem::thumbnail(const splat::RgbdFrame& frame) const {
-  const int factor = std::max(1, frame.width() / config_.loop_closure.dense_width);
-  return splat::downsample(frame, factor);
-}
-
-std::optional<SlamSystem::Placement> SlamSystem::place(const splat::RgbdFrame& thumb, const tracking::PlaceFeatures& features,
-                                                      const std::function<bool(std::size_t)>& eligible) {
-  std::vector<tracking::PlaceMatch> matches;
-  splat::RgbdFrame matched;
-  {
-    std::lock_guard lock(places_mutex_);
-    matches = places_.query(features, eligible);
-    if (matches.empty()) return std::nullopt;
-    const auto it = std::find_if(thumbnails_.begin(), thumbnails_.end(),
-                                 [&](const auto& t) { return t.first == matches.front().keyframe; });
-    if (it == thumbnails_.end()) return std::nullopt;
-    matched = it->second;
-  }
-  const tracking::PlaceMatch& m = matches.front();
-  // Dense alignment of the two views from the RANSAC estimate.
-  tracking::OdometryConfig dense = config_.odometry;
-  dense.finest_width = matched.width();
-  const tracking::OdometryFrame reference(matched, dense), current(thumb, dense);
-  const tracking::OdometryResult aligned = tracking::align_rgbd(reference, current, m.T_keyframe_query.inverse(), dense);
-  if (!aligned.converged) return std::nullopt;
-  return Placement{m.keyframe, aligned.T_cur_ref.inverse(), edge_information(aligned.information), m.inliers};
-}
-
 void SlamSystem::close_loops(const KeyframeJob& job) {
-  const LoopClosureConfig& lc = config_.loop_closure;
-  tracking::PlaceFeatures features = tracking::extract_place_features(job.frame, lc.places);
-  const splat::RgbdFrame thumb = thumbnail(job.frame);
-  const std::size_t separation = static_cast<std::size_t>(lc.min_separation);
-  const std::optional<Placement> found = place(thumb, features, [&](std::size_t k) { return k + separation <= job.keyframe; });
-  {
-    std::lock_guard lock(places_mutex_);
-    places_.add(job.keyframe, std::move(features));
-    thumbnails_.emplace_back(job.keyframe, thumb);
-  }
-  if (!found) return;
-  tracking::PoseGraphEdge loop;
-  loop.i = found->keyframe, loop.j = job.keyframe, loop.loop = true;
-  loop.T_i_j = found->T_keyframe_frame;
-  loop.information = found->information;
   std::vector<Eigen::Isometry3d> poses;
-  std::vector<tracking::PoseGraphEdge> edges;
-  LoopEvent event;
   {
     std::lock_guard lock(mutex_);
     poses = keyframe_world_;
-    edges = edges_;
-    event.frame = frame_of_keyframe(job.keyframe);
-    event.matched_frame = frame_of_keyframe(found->keyframe);
   }
-  edges.push_back(loop);
-  const Eigen::Isometry3d revealed = (poses[loop.i].inverse() * poses[loop.j]).inverse() * loop.T_i_j;
-  event.inliers = found->inliers;
-  event.drift_m = revealed.translation().norm();
-  event.drift_deg = Eigen::AngleAxisd(revealed.linear()).angle() * 180 / M_PI;
-  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, lc.graph);
-  event.accepted = solved.accepted.back();
+  const std::optional<BackEnd::Loop> loop = back_end_.close_loop(job.frame, job.keyframe, poses);
+  if (!loop) return;
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
-    loop_events_.push_back(event);
-    if (!event.accepted) return;
-    edges_.push_back(loop);
-    mapper_corrections = move_keyframes(poses, solved.poses);
+    loop_events_.push_back({frame_of_keyframe(job.keyframe), frame_of_keyframe(loop->matched_keyframe), loop->inliers,
+                            loop->drift_m, loop->drift_deg, loop->accepted});
+    if (!loop->accepted) return;
+    mapper_corrections = move_keyframes(poses, loop->solved);
   }
   mapper_.correct_keyframes(mapper_corrections);
 }
@@ -203,106 +143,23 @@ std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eige
   return mapper_corrections;
 }
 
-namespace {
-
-// The pose graph solved for the keyframes from `first` on alone, with every keyframe outside
-// them that an edge links them to held where it is: the cost stays that of the window however
-// long the run (loops solve the whole graph). The poses of all keyframes, the others unmoved.
-std::vector<Eigen::Isometry3d> solve_window(const std::vector<Eigen::Isometry3d>& poses,
-                                            const std::vector<tracking::PoseGraphEdge>& edges, std::size_t first,
-                                            const tracking::PoseGraphConfig& config) {
-  std::vector<std::size_t> node(poses.size(), poses.size());  // keyframe -> window node
-  std::vector<std::size_t> keyframe;                          // window node -> keyframe
-  std::vector<std::size_t> fixed;
-  const auto add = [&](std::size_t k, bool hold) {
-    if (node[k] != poses.size()) return;
-    node[k] = keyframe.size();
-    keyframe.push_back(k);
-    if (hold) fixed.push_back(node[k]);
-  };
-  for (std::size_t k = first; k < poses.size(); ++k) add(k, k == 0);
-  std::vector<tracking::PoseGraphEdge> window;
-  for (const tracking::PoseGraphEdge& e : edges) {
-    if (e.i < first && e.j < first) continue;
-    add(e.i, true), add(e.j, true);  // a neighbour outside the window: held
-    tracking::PoseGraphEdge w = e;
-    w.i = node[e.i], w.j = node[e.j];
-    window.push_back(w);
-  }
-  if (fixed.empty()) fixed.push_back(node[first]);  // nothing links the window to the rest: its first holds it
-  std::vector<Eigen::Isometry3d> initial;
-  for (std::size_t k : keyframe) initial.push_back(poses[k]);
-  const tracking::PoseGraphResult solved = tracking::optimize_pose_graph(initial, window, fixed, config);
-  std::vector<Eigen::Isometry3d> out = poses;
-  for (std::size_t n = 0; n < keyframe.size(); ++n) out[keyframe[n]] = solved.poses[n];
-  return out;
-}
-
-}  // namespace
-
 void SlamSystem::link_covisible(const KeyframeJob& job) {
-  const int wanted = config_.loop_closure.covisible_keyframes;
-  if (wanted <= 0 || !job.prepared.frame) return;
+  if (config_.loop_closure.covisible_keyframes <= 0 || !job.prepared.frame) return;
   std::vector<Eigen::Isometry3d> poses;
-  std::vector<tracking::PoseGraphEdge> edges;
   {
     std::lock_guard lock(mutex_);
     poses = keyframe_world_;
-    edges = edges_;
   }
-  const tracking::PoseGraphConfig& graph = config_.loop_closure.graph;
-  std::vector<tracking::PoseGraphEdge> added;
-  std::size_t rejected = 0;
-  // Only a blurred keyframe (blur_scale_px or more at the finest level): its reference edge is
-  // then the weak link, colour lying under blur. A sharp keyframe is measured best by its
-  // reference: on teddy the longer baselines' edges made sharp keyframes worse.
-  const tracking::OdometryFrame::Level& finest = job.prepared.frame->levels().back();
-  const double blur_px = finest.fx * job.prepared.angular_rate * job.odometry.exposure;
-  const bool sharp = blur_px < job.odometry.blur_scale_px;
-  for (const FrameTracker::PreparedKeyframe& earlier : sharp ? decltype(covisible_){} : covisible_) {
-    const std::size_t i = earlier.keyframe, j = job.keyframe;
-    if (i >= j || std::any_of(edges.begin(), edges.end(), [&](const auto& e) { return e.i == i && e.j == j; })) continue;
-    tracking::OdometryConfig odometry = job.odometry;
-    odometry.depth_weight = tracking::blur_aware_depth_weight(odometry, *job.prepared.frame, job.prepared.angular_rate,
-                                                              earlier.angular_rate);
-    const tracking::OdometryResult r =
-        tracking::align_rgbd(*earlier.frame, *job.prepared.frame, poses[j].inverse() * poses[i], odometry);
-    if (!r.converged) {
-      ++rejected;
-      continue;
-    }
-    tracking::PoseGraphEdge edge;
-    edge.i = i, edge.j = j;
-    edge.T_i_j = r.T_cur_ref.inverse();
-    // An alignment far from where the chain puts the pair found another minimum: left out.
-    const Eigen::Isometry3d disagreement = (poses[i].inverse() * poses[j]).inverse() * edge.T_i_j;
-    if (disagreement.translation().norm() > graph.drift_floor_m ||
-        Eigen::AngleAxisd(disagreement.linear()).angle() * 180 / M_PI > graph.drift_floor_deg) {
-      ++rejected;
-      continue;
-    }
-    edge.information = edge_information(r.information);
-    added.push_back(edge);
-  }
-  covisible_.push_back(job.prepared);
-  covisible_.back().keyframe = job.keyframe;
-  // Its reference among them already has its edge: `wanted` besides it.
-  while (covisible_.size() > static_cast<std::size_t>(wanted) + 1) covisible_.pop_front();
-  {
-    std::lock_guard lock(mutex_);
-    totals_.covisible_edges += added.size();
-    totals_.covisible_rejected += rejected;
-  }
-  if (added.empty()) return;
-  edges.insert(edges.end(), added.begin(), added.end());
-  std::size_t oldest = job.keyframe;
-  for (const FrameTracker::PreparedKeyframe& k : covisible_) oldest = std::min(oldest, k.keyframe);
-  const std::vector<Eigen::Isometry3d> solved = solve_window(poses, edges, oldest, graph);
+  FrameTracker::PreparedKeyframe keyframe = job.prepared;
+  keyframe.keyframe = job.keyframe;
+  const BackEnd::Linked linked = back_end_.link_covisible(keyframe, job.odometry, poses);
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
-    edges_.insert(edges_.end(), added.begin(), added.end());
-    mapper_corrections = move_keyframes(poses, solved);
+    totals_.covisible_edges += linked.edges;
+    totals_.covisible_rejected += linked.rejected;
+    if (linked.solved.empty()) return;
+    mapper_corrections = move_keyframes(poses, linked.solved);
   }
   mapper_.correct_keyframes(mapper_corrections);
 }
@@ -382,8 +239,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
     });
     if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
       // Lost even against the recent keyframes: look for the frame among all of them.
-      const tracking::PlaceFeatures features = tracking::extract_place_features(frame, config_.loop_closure.places);
-      if (const std::optional<Placement> found = place(thumbnail(frame), features, [](std::size_t) { return true; })) {
+      if (const std::optional<BackEnd::Placement> found = back_end_.place(frame, [](std::size_t) { return true; })) {
         {
           std::lock_guard lock(mutex_);
           record.T_world_cam = splat::orthonormalized(keyframe_world_[found->keyframe] * found->T_keyframe_frame);
@@ -414,11 +270,8 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
-        tracking::PoseGraphEdge edge;
-        edge.i = record.reference, edge.j = keyframe_world_.size();
-        edge.T_i_j = keyframe_world_[record.reference].inverse() * record.T_world_cam;
-        edge.information = edge_information(record.information);
-        edges_.push_back(edge);
+        back_end_.add_odometry_edge(record.reference, keyframe_world_.size(),
+                                    keyframe_world_[record.reference].inverse() * record.T_world_cam, record.information);
       }
       keyframe_world_.push_back(record.T_world_cam);
     }
@@ -464,13 +317,11 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
 SlamSystem::State SlamSystem::state() {
   wait_for_mapping();
   std::lock_guard lock(mutex_);
-  State s{tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
-          edges_,           loop_events_,     tracker_correction_, {}, {}};
-  for (const FrameTracker::PreparedKeyframe& k : covisible_) {
-    s.covisible.push_back(k.keyframe);
-    s.covisible_rates.push_back(k.angular_rate);
-  }
-  return s;
+  BackEnd::State back_end = back_end_.state();
+  return {tracker_.state(),        mapper_.state(),        mapper_keyframes_,
+          keyframe_world_,         frames_,                totals_,
+          std::move(back_end.edges), loop_events_,         tracker_correction_,
+          std::move(back_end.covisible), std::move(back_end.covisible_rates)};
 }
 
 void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
@@ -499,26 +350,9 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     if (number >= keyframe_frame.size()) inconsistent("keyframe " + std::to_string(number) + " does not exist");
     return load(keyframe_frame[number]);
   };
-  for (const tracking::PoseGraphEdge& e : s.edges) {
-    if (e.i >= keyframe_frame.size() || e.j >= keyframe_frame.size()) inconsistent("a pose graph edge names a keyframe that does not exist");
-  }
-  if (s.covisible_rates.size() != s.covisible.size() ||
-      s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
-    inconsistent(std::to_string(s.covisible.size()) + " covisible keyframes with " + std::to_string(s.covisible_rates.size()) +
-                 " rates");
-  }
-  for (std::size_t k = 0; k < s.covisible.size(); ++k) {
-    // Prepared as tracking prepares a reference it restores (tracker_.restore).
-    covisible_.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(s.covisible[k]), config_.odometry),
-                          s.covisible[k], s.covisible_rates[k]});
-  }
   tracker_.restore(s.tracker, keyframe);
-  std::lock_guard places_lock(places_mutex_);
-  for (std::size_t k : s.mapper_keyframes) {
-    const splat::RgbdFrame frame = keyframe(k);
-    places_.add(k, tracking::extract_place_features(frame, config_.loop_closure.places));
-    thumbnails_.emplace_back(k, thumbnail(frame));
-  }
+  back_end_.restore({std::move(s.edges), std::move(s.covisible), std::move(s.covisible_rates)}, keyframe_frame.size(),
+                    s.mapper_keyframes, keyframe);
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
     if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
     return keyframe(s.mapper_keyframes[number]);
@@ -528,7 +362,6 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   keyframe_world_ = std::move(s.keyframe_world);
   frames_ = std::move(s.frames);
   totals_ = s.totals;
-  edges_ = std::move(s.edges);
   loop_events_ = std::move(s.loop_events);
   tracker_correction_ = s.tracker_correction;
   map_ = std::make_shared<const splat::Gaussians>(mapper_.map());

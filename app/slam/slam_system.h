@@ -24,12 +24,12 @@
 #include <Eigen/Geometry>
 
 #include "mapping/mapper.h"
+#include "slam/back_end.h"
 #include "slam/frame_tracker.h"
 #include "slam/moving_mask.h"
 #include "slam/slam_config.h"
 #include "splat/rasterizer.h"
 #include "splat/rgbd_frame.h"
-#include "tracking/place_recognition.h"
 #include "tracking/pose_graph.h"
 
 namespace app {
@@ -162,28 +162,16 @@ class SlamSystem {
   };
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
-  // Loop closure for a keyframe just mapped (the mapping thread's): place recognition against
-  // earlier keyframes, the pose graph, and the keyframes and the map moved to its solution.
+  // Loop closure for a keyframe just mapped (the mapping thread's), then covisibility: the back
+  // end's solutions applied to the keyframes, the map and tracking.
   void close_loops(const KeyframeJob& job);
-  // Covisibility for a keyframe just mapped: dense alignments against the recent keyframes
-  // besides its reference, and the pose graph solved with them.
   void link_covisible(const KeyframeJob& job);
   // Moves every keyframe (and with them the map and tracking's motion model) from `before`
   // (the poses the graph was solved from) to `solved`; the caller holds mutex_ and calls
   // mapper_.correct_keyframes with what it returns once it has released it.
   std::vector<Eigen::Isometry3d> move_keyframes(const std::vector<Eigen::Isometry3d>& before,
                                                 const std::vector<Eigen::Isometry3d>& solved);
-  std::deque<FrameTracker::PreparedKeyframe> covisible_;  // the mapping thread's: recent keyframes
   std::size_t frame_of_keyframe(std::size_t keyframe) const;  // caller holds mutex_
-  // A frame's place among the mapped keyframes: the best verified match, densely aligned.
-  struct Placement {
-    std::size_t keyframe;
-    Eigen::Isometry3d T_keyframe_frame;
-    Eigen::Matrix<double, 6, 6> information;
-    int inliers;
-  };
-  std::optional<Placement> place(const splat::RgbdFrame& thumb, const tracking::PlaceFeatures& features,
-                                 const std::function<bool(std::size_t)>& eligible);
   // Applies a correction the mapping thread left for tracking (the caller is tracking).
   void apply_tracker_correction();
   void mapping_loop();
@@ -194,6 +182,7 @@ class SlamSystem {
   splat::Rasterizer& tracking_rasterizer_;
   FrameTracker tracker_;
   mapping::Mapper mapper_;  // the mapping thread's alone while it runs
+  BackEnd back_end_;
   const bool threaded_;
   std::vector<std::size_t> mapper_keyframes_;  // the system's keyframe number per mapper number
 
@@ -202,13 +191,8 @@ class SlamSystem {
   std::vector<FramePose> frames_;
   std::shared_ptr<const splat::Gaussians> map_ = std::make_shared<const splat::Gaussians>();
   MappingTotals totals_;
-  std::vector<tracking::PoseGraphEdge> edges_;  // keyframe numbers; odometry and accepted loops
   std::vector<LoopEvent> loop_events_;
   Eigen::Isometry3d tracker_correction_ = Eigen::Isometry3d::Identity();
-  std::mutex places_mutex_;  // guards places_ and thumbnails_ (mapping adds, tracking relocalizes)
-  tracking::PlaceDatabase places_;
-  std::vector<std::pair<std::size_t, splat::RgbdFrame>> thumbnails_;  // keyframe, at dense_width
-  splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;
   std::optional<KeyframeJob> pending_;
   std::deque<KeyframeJob> backlog_;  // skipped keyframes, oldest first
   double backlog_mib_ = 0;
