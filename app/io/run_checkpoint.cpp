@@ -272,11 +272,11 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                        {"keyframe_world", poses_to_json(s.keyframe_world)},
                        {"frames", frames_to_json(s.frames)},
                        {"totals", totals_to_json(s.totals)},
-                       {"edges", edges_to_json(s.edges)},
+                       {"edges", edges_to_json(s.back_end.edges)},
                        {"loop_events", loop_events_to_json(s.loop_events)},
                        {"tracker_correction", pose_to_json(s.tracker_correction)},
-                       {"covisible", s.covisible},
-                       {"covisible_rates", s.covisible_rates}};
+                       {"covisible", s.back_end.covisible},
+                       {"covisible_rates", s.back_end.covisible_rates}};
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
@@ -317,12 +317,12 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     c.slam.keyframe_world = poses_from_json(header.at("keyframe_world"));
     c.slam.frames = frames_from_json(header.at("frames"));
     c.slam.totals = totals_from_json(header.at("totals"));
-    c.slam.edges = edges_from_json(header.at("edges"));
+    c.slam.back_end.edges = edges_from_json(header.at("edges"));
     c.slam.loop_events = loop_events_from_json(header.at("loop_events"));
     c.slam.tracker_correction = pose_from_json(header.at("tracker_correction"));
     // Checkpoints from before covisibility continue with none (it links the next keyframes).
-    c.slam.covisible = header.value("covisible", std::vector<std::size_t>{});
-    c.slam.covisible_rates = header.value("covisible_rates", std::vector<double>{});
+    c.slam.back_end.covisible = header.value("covisible", std::vector<std::size_t>{});
+    c.slam.back_end.covisible_rates = header.value("covisible_rates", std::vector<double>{});
   } catch (const json::exception& e) {
     fail(path, std::string("malformed checkpoint header: ") + e.what());
   } catch (const splat::Error& e) {

@@ -150,9 +150,7 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
     std::lock_guard lock(mutex_);
     poses = keyframe_world_;
   }
-  FrameTracker::PreparedKeyframe keyframe = job.prepared;
-  keyframe.keyframe = job.keyframe;
-  const BackEnd::Linked linked = back_end_.link_covisible(keyframe, job.odometry, poses);
+  const BackEnd::Linked linked = back_end_.link_covisible(job.prepared, job.odometry, poses);
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
@@ -317,11 +315,8 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
 SlamSystem::State SlamSystem::state() {
   wait_for_mapping();
   std::lock_guard lock(mutex_);
-  BackEnd::State back_end = back_end_.state();
-  return {tracker_.state(),        mapper_.state(),        mapper_keyframes_,
-          keyframe_world_,         frames_,                totals_,
-          std::move(back_end.edges), loop_events_,         tracker_correction_,
-          std::move(back_end.covisible), std::move(back_end.covisible_rates)};
+  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
+          back_end_.state(), loop_events_,     tracker_correction_};
 }
 
 void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
@@ -351,8 +346,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     return load(keyframe_frame[number]);
   };
   tracker_.restore(s.tracker, keyframe);
-  back_end_.restore({std::move(s.edges), std::move(s.covisible), std::move(s.covisible_rates)}, keyframe_frame.size(),
-                    s.mapper_keyframes, keyframe);
+  back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe);
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
     if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
     return keyframe(s.mapper_keyframes[number]);

@@ -136,13 +136,9 @@ class SlamSystem {
     std::vector<Eigen::Isometry3d> keyframe_world;  // T_world_cam per keyframe number
     std::vector<FramePose> frames;              // one per frame processed
     MappingTotals totals;
-    std::vector<tracking::PoseGraphEdge> edges;  // the keyframe pose graph's edges
+    BackEnd::State back_end;  // the keyframe pose graph's edges, covisibility's recent keyframes
     std::vector<LoopEvent> loop_events;
     Eigen::Isometry3d tracker_correction = Eigen::Isometry3d::Identity();  // not yet applied
-    // The recent keyframes new ones are aligned against (covisibility), oldest first, and the
-    // angular rates they were taken at.
-    std::vector<std::size_t> covisible;
-    std::vector<double> covisible_rates;
   };
   // The state between two frames (threaded: once mapping is idle).
   State state();
@@ -156,7 +152,8 @@ class SlamSystem {
     splat::RgbdFrame frame;
     Eigen::Isometry3d T_world_cam;
     std::size_t keyframe;  // its number among the system's keyframes
-    // Odometry: the keyframe as tracking prepared it, and tracking's settings then (covisibility).
+    // Odometry: the keyframe as tracking prepared it (numbered as `keyframe`: it is tracking's newest
+    // reference), and tracking's settings then (covisibility).
     FrameTracker::PreparedKeyframe prepared;
     tracking::OdometryConfig odometry;
   };
