@@ -29,7 +29,7 @@ class RosGraph {
   // SIGINT to a process started above, then its exit code (128 + signal if a signal ended it).
   int interrupt(pid_t pid);
   // Waits for a process started above to exit by itself; its exit code (a hung one is stopped
-  // after 15 minutes).
+  // after 4 minutes).
   int wait(pid_t pid);
   // Runs a shell command in this graph (rosparam, rosservice, rostopic) and collects its output.
   RunResult run(const std::string& command) const;
