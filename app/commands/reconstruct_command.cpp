@@ -142,8 +142,7 @@ int run_reconstruct(const ReconstructOptions& o) {
   save_state();
   const std::size_t refine_frames = slam.refine_frames().size();
   if (config.refine_passes > 0 && refine_frames > 0 && !InterruptGuard::interrupted()) {
-    const std::size_t visits = refine_frames * static_cast<std::size_t>(config.refine_passes);
-    Progress refine_progress("refine", visits, "frame visits");
+    Progress refine_progress("refine", config.sweep_visits(refine_frames).total, "frame visits");
     const SlamSystem::Refinement refined = slam.refine_map(
         [&](std::size_t i) { return dataset.load(i); },
         [&](std::size_t done, std::size_t) { refine_progress.update(done, std::to_string(slam.map()->size()) + " Gaussians"); },
@@ -155,9 +154,10 @@ int run_reconstruct(const ReconstructOptions& o) {
     outputs.extra()["refinement"] = {{"frames", refined.frames}, {"passes", config.refine_passes},
                                      {"iterations_per_visit", config.refine_iterations}, {"pruned", refined.pruned},
                                      {"ghosts", refined.ghosts}, {"visits", refined.visits}, {"stopped_early", refined.stopped},
+                                     {"blurred_frames", refined.blurred},
                                      {"seconds", refine_progress.elapsed_seconds()}};
-    std::fprintf(stderr, "refined the map: %zu frames x %d passes in %.1f s, %zu Gaussians pruned (%zu ghosts)\n",
-                 refined.frames, config.refine_passes, refine_progress.elapsed_seconds(), refined.pruned, refined.ghosts);
+    std::fprintf(stderr, "refined the map: %zu visits over %zu frames in %.1f s, %zu Gaussians pruned (%zu ghosts), %zu frames' blur modelled\n",
+                 refined.visits, refined.frames, refine_progress.elapsed_seconds(), refined.pruned, refined.ghosts, refined.blurred);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
   outputs.set_mapping(slam.mapping_totals(), slam.loop_events(), slam.mapping_on_device());

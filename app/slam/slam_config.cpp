@@ -1,5 +1,7 @@
 #include "slam/slam_config.h"
 
+#include <algorithm>
+
 #include "splat/field_check.h"
 
 namespace app {
@@ -18,6 +20,8 @@ void SlamConfig::validate() const {
   check.at_least("refine_passes", refine_passes, 0);
   check.at_least("refine_iterations", refine_iterations, 0);
   check.at_least("refine_densify_passes", refine_densify_passes, 0);
+  check.in_range("refine_blur_samples", refine_blur_samples, 1, 16);
+  check.at_least("refine_max_visits", refine_max_visits, 0);
   check.at_least("refine_cache_mib", refine_cache_mib, 0.0);
   check.at_least("relocalize_iterations", relocalize_iterations, 0);
   check.at_least("mapping_backlog_mib", mapping_backlog_mib, 0.0);
@@ -44,6 +48,15 @@ void SlamConfig::validate() const {
   moving.validate("moving.");
   tracking.validate("tracking.");
   mapping.validate("mapping.");
+}
+
+SlamConfig::SweepVisits SlamConfig::sweep_visits(std::size_t frames) const {
+  const auto passes = static_cast<std::size_t>(std::max(refine_passes, 0));
+  SweepVisits v;
+  v.densifying = frames * std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
+  const auto cap = static_cast<std::size_t>(std::max(refine_max_visits, 0));
+  v.total = v.densifying + std::min(frames * passes - v.densifying, cap > v.densifying ? cap - v.densifying : 0);
+  return v;
 }
 
 }  // namespace app

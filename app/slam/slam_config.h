@@ -72,10 +72,19 @@ struct SlamConfig {
   // later keyframes degrade what earlier ones saw.
   int refine_passes = 12;
   int refine_iterations = 1;  // more steps per visit at the same rates rendered worse
+  // The sweep's visits after its densifying passes stop at this many in all, so a long recording
+  // sweeps about as long as a short one (2,400 visits: 2 minutes at 640x480 on 2 cores; teddy and
+  // 7-Scenes, 200 frames x 12 passes, stay under it). Further visits go round the frames evenly.
+  int refine_max_visits = 2400;
   // Sweep every tracked frame (true) or the keyframes alone: more viewpoints for the same steps.
   bool refine_all_frames = true;
   // The first this many passes also densify each visited frame, covering what no keyframe saw.
   int refine_densify_passes = 1;
+  // Blurred frames are rendered as the camera recorded them: the mean of views across the
+  // exposure (one per 2 pixels of blur at the sweep's resolution, up to this many), the motion
+  // from the trajectory about the frame over the nominal odometry.exposure (tracking's estimate
+  // of it was 8.7x that on 7-Scenes, docs/tuning.md). 1: no blur model.
+  int refine_blur_samples = 1;
   // Swept frames (at the refinement resolution) stay in memory up to this many MiB; the rest are
   // reloaded on every visit (teddy's 193 frames take 237 MiB; a reload costs 9 ms).
   double refine_cache_mib = 512;
@@ -88,6 +97,13 @@ struct SlamConfig {
   // the stream; beyond it the oldest are dropped for good.
   double mapping_backlog_mib = 512;
   LoopClosureConfig loop_closure;
+
+  struct SweepVisits {
+    std::size_t densifying = 0, total = 0;  // the first `densifying` visits densify
+  };
+  // The final sweep's visits over this many frames (refine_passes, refine_densify_passes,
+  // refine_max_visits).
+  SweepVisits sweep_visits(std::size_t frames) const;
 
   // Throws splat::Error naming the first field out of range ("mapping.window: expected an
   // integer >= 1, got 0"), tracking and mapping fields included.

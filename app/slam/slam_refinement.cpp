@@ -1,5 +1,6 @@
 // SlamSystem's final sweep: the map refined over the tracked frames after the last one.
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <random>
 
@@ -7,6 +8,10 @@
 #include "tracking/tracker.h"
 
 namespace app {
+
+// The blur model's views are this many sweep pixels apart, so that their mean is a smooth streak
+// (the setting measured in docs/tuning.md; a frame under 1.5 px of blur renders once).
+constexpr double kBlurPxPerView = 1;
 
 std::vector<std::size_t> SlamSystem::refine_frames() const {
   std::lock_guard lock(mutex_);
@@ -17,6 +22,28 @@ std::vector<std::size_t> SlamSystem::refine_frames() const {
     }
   }
   return frames;
+}
+
+std::vector<mapping::ExposureMotion> SlamSystem::exposure_motions(
+    const std::vector<std::size_t>& frames, const std::vector<Eigen::Isometry3d>& T_world_cam,
+    const std::function<const splat::RgbdFrame&(std::size_t)>& frame_at) const {
+  std::vector<mapping::ExposureMotion> motion(T_world_cam.size());
+  const double exposure = config_.odometry.exposure;  // the nominal exposure: see docs/tuning.md
+  if (config_.refine_blur_samples <= 1 || frames.size() < 2 || !(exposure > 0)) return motion;
+  const double fx = frame_at(frames.front()).camera.fx;  // at the sweep's resolution
+  std::vector<double> times(frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) times[k] = frame_at(frames[k]).timestamp;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    // The motion between the neighbouring swept frames, scaled to the exposure.
+    const std::size_t a = k > 0 ? k - 1 : k, b = k + 1 < frames.size() ? k + 1 : k;
+    const double dt = times[b] - times[a];
+    if (!(dt > 0)) continue;
+    const splat::Vector6d twist = splat::se3_log(T_world_cam[frames[a]].inverse() * T_world_cam[frames[b]]) * (exposure / dt);
+    const double blur_px = fx * twist.tail<3>().norm();
+    if (!std::isfinite(blur_px)) continue;
+    motion[frames[k]] = {twist, static_cast<int>(std::clamp(std::round(blur_px / kBlurPxPerView), 1.0, double(config_.refine_blur_samples)))};
+  }
+  return motion;
 }
 
 SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFrame(std::size_t)>& load,
@@ -36,7 +63,6 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   std::vector<mapping::PoseAdam> poses(T_world_cam.size());
   std::vector<std::size_t> order = frames;
   std::mt19937 rng(1);
-  const std::size_t total = frames.size() * static_cast<std::size_t>(config_.refine_passes);
   // Frames kept in memory (bounded by refine_cache_mib), the others reloaded on each visit.
   std::vector<std::optional<splat::RgbdFrame>> cache(T_world_cam.size());
   splat::RgbdFrame uncached;
@@ -77,22 +103,27 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     prune_map();
   };
   carve(0);
+  const std::vector<mapping::ExposureMotion> motion = exposure_motions(frames, T_world_cam, frame_at);
+  result.blurred = static_cast<std::size_t>(std::count_if(frames.begin(), frames.end(), [&](std::size_t i) { return motion[i].samples > 1; }));
   const std::size_t seeded_from = mapper_.size();
-  for (int pass = 0; pass < config_.refine_passes && !result.stopped; ++pass) {
-    if (pass == config_.refine_densify_passes && pass > 0) carve(seeded_from);
-    std::shuffle(order.begin(), order.end(), rng);
-    for (const std::size_t i : order) {
-      if (stop && stop()) {
-        result.stopped = true;
-        break;
-      }
-      Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
-      mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
-                     pass < config_.refine_densify_passes, i);
-      T_world_cam[i] = T_cam_world.inverse();
-      if (mapper_.size() != published) publish(), published = mapper_.size();
-      if (visited) visited(++result.visits, total);
+  const SlamConfig::SweepVisits visits = config_.sweep_visits(frames.size());
+  // After the densifying passes the frames are visited in shuffled rounds, so none is visited
+  // twice before every one was once (also where refine_max_visits ends a round early).
+  std::size_t next = order.size();  // the current round's next frame; a new round at the end
+  for (std::size_t v = 0; v < visits.total; ++v) {
+    if (stop && stop()) {
+      result.stopped = true;
+      break;
     }
+    if (v == visits.densifying && v > 0) carve(seeded_from);
+    if (next == order.size()) std::shuffle(order.begin(), order.end(), rng), next = 0;
+    const std::size_t i = order[next++];
+    Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
+    mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
+                   v < visits.densifying, i, motion[i]);
+    T_world_cam[i] = T_cam_world.inverse();
+    if (mapper_.size() != published) publish(), published = mapper_.size();
+    if (visited) visited(++result.visits, visits.total);
   }
   prune_map();
   mapper_.release_sweep_frames();

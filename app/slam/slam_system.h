@@ -103,6 +103,7 @@ class SlamSystem {
   std::vector<std::size_t> refine_frames() const;
   struct Refinement {
     std::size_t frames = 0, visits = 0, pruned = 0, ghosts = 0;  // ghosts: of the pruned
+    std::size_t blurred = 0;  // frames rendered through the blur model (refine_blur_samples)
     bool stopped = false;  // stop() ended it early
   };
   // The final sweep (SlamConfig::refine_passes) over refine_frames(), each loaded with
@@ -148,6 +149,11 @@ class SlamSystem {
   void restore(State state, const std::function<splat::RgbdFrame(std::size_t)>& load);
 
  private:
+  // Each swept frame's motion over its exposure (SlamConfig::refine_blur_samples), by frame
+  // index; frame_at(i) gives frame i as the sweep refines it.
+  std::vector<mapping::ExposureMotion> exposure_motions(const std::vector<std::size_t>& frames,
+                                                        const std::vector<Eigen::Isometry3d>& T_world_cam,
+                                                        const std::function<const splat::RgbdFrame&(std::size_t)>& frame_at) const;
   struct KeyframeJob {
     splat::RgbdFrame frame;
     Eigen::Isometry3d T_world_cam;

@@ -233,7 +233,25 @@ splat::MappingStepResult Mapper::device_step(const Keyframe& kf, uint64_t key, S
 
 splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
   const splat::RgbdFrame& f = kf.frame;
-  const splat::ForwardResult render = rasterizer_.forward(map_, splat::posed(f.camera, kf.T_cam_world), splat::images_only());
+  // The views across the exposure, and the images the camera would have recorded: their mean.
+  const int samples = kf.motion.samples;
+  std::vector<splat::ForwardResult> views;
+  for (int k = 0; k < samples; ++k) {
+    const double at = samples > 1 ? (k + 0.5) / samples - 0.5 : 0.0;  // in exposures from mid-exposure
+    const Eigen::Isometry3d T_cam_world = splat::se3_exp(-at * kf.motion.twist) * kf.T_cam_world;
+    views.push_back(rasterizer_.forward(map_, splat::posed(f.camera, T_cam_world), splat::images_only()));
+  }
+  splat::ForwardResult mean;
+  if (samples > 1) {
+    for (auto field : {&splat::ForwardResult::rgb, &splat::ForwardResult::depth, &splat::ForwardResult::alpha}) {
+      std::vector<float>& out = mean.*field;
+      out.assign((views[0].*field).size(), 0.f);
+      for (const splat::ForwardResult& v : views) {
+        for (std::size_t p = 0; p < out.size(); ++p) out[p] += (v.*field)[p] / static_cast<float>(samples);
+      }
+    }
+  }
+  const splat::ForwardResult& render = samples > 1 ? mean : views[0];
   splat::ImageGrads d;
   d.rgb.assign(render.rgb.size(), 0.f);
   d.depth.assign(render.depth.size(), 0.f);
@@ -269,7 +287,22 @@ splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
   const double threshold = step == Step::kWindow ? config_.depth_alpha_threshold : config_.refine_depth_alpha_threshold;
   result.loss += splat::silhouette_depth_l1_loss<float>(render.depth, render.alpha, target_depth, threshold, d.depth, d.alpha,
                                                         step == Step::kWindow ? config_.depth_weight : config_.refine_depth_weight);
-  splat::BackwardResult backward = rasterizer_.backward(render, d);
+  // Each view carries its share of the mean's gradient; the pose's is summed over them.
+  if (samples > 1) {
+    for (auto field : {&splat::ImageGrads::rgb, &splat::ImageGrads::depth, &splat::ImageGrads::alpha}) {
+      for (float& g : d.*field) g /= static_cast<float>(samples);
+    }
+  }
+  splat::BackwardResult backward = rasterizer_.backward(views[0], d);
+  for (int k = 1; k < samples; ++k) {
+    const splat::BackwardResult view = rasterizer_.backward(views[k], d);
+    backward.d_loss_d_pose += view.d_loss_d_pose;
+    for (const splat::ParamGroup group : splat::kAllParamGroups) {
+      std::vector<float>& into = splat::param_group(backward.d_gaussians, group);
+      const std::vector<float>& add = splat::param_group(view.d_gaussians, group);
+      for (std::size_t i = 0; i < into.size(); ++i) into[i] += add[i];
+    }
+  }
   result.d_loss_d_pose = backward.d_loss_d_pose;
   splat::GaussianGrads& grads = backward.d_gaussians;
   if (config_.isotropic) {
@@ -414,9 +447,13 @@ void Mapper::release_sweep_frames() {
 }
 
 double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                      int iterations, bool densify_first, std::optional<std::size_t> frame_id) {
+                      int iterations, bool densify_first, std::optional<std::size_t> frame_id, const ExposureMotion& motion) {
   if (size() == 0) return 0;
+  if (motion.samples < 1 || !motion.twist.allFinite()) {
+    throw splat::Error("Mapper::refine: exposure motion needs samples >= 1 and a finite twist, got " + std::to_string(motion.samples) + " samples");
+  }
   Keyframe kf{refinement_frame, T_cam_world};
+  kf.motion = motion;
   const uint64_t key = device_ ? store_refinement_frame(kf.frame, frame_id) : kRefineTarget;
   if (densify_first) {
     densify(kf.frame, key, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);

@@ -56,6 +56,27 @@ TEST(SlamConfigFile, TheLibraryDefaultsAreTheSystemDefaults) {
   EXPECT_NO_THROW(c.validate());
 }
 
+// The sweep's visits: whole densifying passes, then the later passes up to refine_max_visits.
+TEST(SlamConfigFile, SweepVisitsStopAtTheCapAfterTheDensifyingPasses) {
+  app::SlamConfig c;
+  c.refine_passes = 12;
+  c.refine_densify_passes = 1;
+  c.refine_max_visits = 2400;
+  EXPECT_EQ(c.sweep_visits(193).densifying, 193u);
+  EXPECT_EQ(c.sweep_visits(193).total, 193u * 12) << "under the cap: every pass";
+  EXPECT_EQ(c.sweep_visits(700).densifying, 700u);
+  EXPECT_EQ(c.sweep_visits(700).total, 2400u);
+  EXPECT_EQ(c.sweep_visits(3000).total, 3000u) << "the densifying pass is never cut";
+  c.refine_max_visits = 0;
+  EXPECT_EQ(c.sweep_visits(10).total, 10u);
+  c.refine_densify_passes = 0;
+  EXPECT_EQ(c.sweep_visits(10).total, 0u);
+  c.refine_passes = 0;
+  c.refine_densify_passes = 1;
+  c.refine_max_visits = 2400;
+  EXPECT_EQ(c.sweep_visits(10).total, 0u) << "no passes, no visits";
+}
+
 // What --print-config writes, --config reads back unchanged, non-default values included.
 TEST(SlamConfigFile, PrintedConfigurationReadsBackUnchanged) {
   app::SlamConfig c;

@@ -2,6 +2,8 @@
 // ground truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "datasets/dataset.h"
 #include "commands/evaluation.h"
 #include "slam/slam_system.h"
@@ -282,6 +284,37 @@ TEST(SlamSystem, RefinementCacheLoadsEachFrameOnceAndChangesNothing) {
   ASSERT_EQ(cached.first.size(), reloaded.first.size());
   for (std::size_t i = 0; i < cached.first.size(); ++i) EXPECT_TRUE(cached.first[i].isApprox(reloaded.first[i], 0)) << i;
   EXPECT_EQ(cached.second, reloaded.second);
+}
+
+// refine_max_visits bounds the sweep: the densifying pass visits every frame, and the visits left
+// go round the frames so that none is visited twice before the others (frames reloaded on every
+// visit show which were visited).
+TEST(SlamSystem, CappedSweepVisitsTheFramesEvenly) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 5);
+  auto rasterizer = splat::make_cpu_rasterizer({1});
+  app::SlamConfig config;
+  config.refine_passes = 4;
+  config.refine_densify_passes = 1;
+  config.refine_max_visits = 8;
+  config.refine_cache_mib = 0;
+  ASSERT_EQ(config.sweep_visits(5).densifying, 5u);
+  ASSERT_EQ(config.sweep_visits(5).total, 8u);
+  app::SlamSystem slam(*rasterizer, config);
+  process_all(slam, dataset);
+  std::vector<int> loads(dataset.entries.size(), 0);
+  std::size_t reported_total = 0;
+  const app::SlamSystem::Refinement refinement = slam.refine_map(
+      [&](std::size_t i) {
+        ++loads.at(i);
+        return dataset.load(i);
+      },
+      [&](std::size_t, std::size_t total) { reported_total = total; });
+  EXPECT_EQ(refinement.visits, 8u);
+  EXPECT_EQ(reported_total, 8u);
+  // Each frame: two ghost counts, the densifying visit, and one later visit for three of them.
+  EXPECT_EQ(std::count(loads.begin(), loads.end(), 4), 3);
+  EXPECT_EQ(std::count(loads.begin(), loads.end(), 3), 2);
 }
 
 }  // namespace

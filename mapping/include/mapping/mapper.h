@@ -17,6 +17,7 @@
 #include "splat/rasterizer.h"
 #include "splat/resident_map.h"
 #include "splat/rgbd_frame.h"
+#include "splat/se3.h"
 
 namespace mapping {
 
@@ -128,6 +129,15 @@ struct MapperState {
   std::string rng;        // the window sampler, as std::mt19937's operator<< writes it
 };
 
+// The camera's motion while its shutter was open: the twist [v, omega] in the camera's frame
+// over the whole exposure, and how many views spread evenly across it a render averages, the
+// way the camera recorded the frame (1: the mid-exposure view alone). The host's rasterizer
+// renders them; a device-resident map renders the mid-exposure view.
+struct ExposureMotion {
+  splat::Vector6d twist = splat::Vector6d::Zero();
+  int samples = 1;
+};
+
 // Builds and refines the map from keyframes with known poses. Memory apart from the map is
 // bounded by max_keyframes.
 class Mapper {
@@ -145,9 +155,11 @@ class Mapper {
   // Where `pose` is given (and refine_pose_learning_rate > 0) the frame's pose moves with the map,
   // with that Adam state; otherwise it stays.
   // `frame_id` names the frame for the device's sweep cache (sweep_device_cache_mib): the same
-  // id must always come with the same frame, until release_sweep_frames().
+  // id must always come with the same frame, until release_sweep_frames(). The frame's motion
+  // blur is rendered as `motion` says.
   double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                int iterations, bool densify = false, std::optional<std::size_t> frame_id = std::nullopt);
+                int iterations, bool densify = false, std::optional<std::size_t> frame_id = std::nullopt,
+                const ExposureMotion& motion = {});
   // Frees the device's copies of the sweep's frames.
   void release_sweep_frames();
   // An input frame as refine() takes it: at refine_resolution_factor.
@@ -188,6 +200,7 @@ class Mapper {
     Eigen::Isometry3d T_cam_world;
     std::size_t number = 0;  // in the order added; 0 is the world frame
     PoseAdam pose = {};
+    ExposureMotion motion = {};  // what a render averages to look like the frame
   };
   // Seeds Gaussians where the frame (at its pose) sees what the map lacks, and with
   // `fill_holes` where it has no depth too; returns how many. On the device the coverage test
