@@ -58,12 +58,17 @@ splat::Gaussians refined_map(splat::Rasterizer& rasterizer, const splat::RgbdFra
   return mapper.map();
 }
 
-TEST(BlurModel, FramesFittedThroughTheirMotionLeaveASharperMap) {
+// The fastest-turning frame of a blurred sequence, at its true pose, and a CPU rasterizer.
+class BlurModel : public ::testing::Test {
+ protected:
   gslam::test::TempDir dir;
   const BlurredFrame b = fastest_blurred_frame(dir.path());
   const Eigen::Isometry3d T_cam_world = b.blurred.entries[b.index].T_world_cam_truth->inverse();
-  auto rasterizer = splat::make_cpu_rasterizer();
+  std::unique_ptr<splat::Rasterizer> rasterizer = splat::make_cpu_rasterizer();
   const splat::RgbdFrame frame = b.blurred.load(b.index);
+};
+
+TEST_F(BlurModel, FramesFittedThroughTheirMotionLeaveASharperMap) {
   const splat::RgbdFrame truth = splat::downsample(b.sharp.load(b.index), mapping::MapperConfig{}.refine_resolution_factor);
   auto psnr_against_truth = [&](const splat::Gaussians& map) {
     const splat::ForwardResult r = rasterizer->forward(map, splat::posed(truth.camera, T_cam_world), splat::images_only());
@@ -79,12 +84,7 @@ TEST(BlurModel, FramesFittedThroughTheirMotionLeaveASharperMap) {
 }
 
 // Views that do not move average to the one view: the same map as no model at all.
-TEST(BlurModel, ViewsThatDoNotMoveGiveThePlainMap) {
-  gslam::test::TempDir dir;
-  const BlurredFrame b = fastest_blurred_frame(dir.path());
-  const Eigen::Isometry3d T_cam_world = b.blurred.entries[b.index].T_world_cam_truth->inverse();
-  auto rasterizer = splat::make_cpu_rasterizer();
-  const splat::RgbdFrame frame = b.blurred.load(b.index);
+TEST_F(BlurModel, ViewsThatDoNotMoveGiveThePlainMap) {
   const splat::Gaussians plain = refined_map(*rasterizer, frame, T_cam_world, 20, {});
   const splat::Gaussians still = refined_map(*rasterizer, frame, T_cam_world, 20, {splat::Vector6d::Zero(), 4});
   ASSERT_EQ(still.size(), plain.size());
@@ -93,12 +93,7 @@ TEST(BlurModel, ViewsThatDoNotMoveGiveThePlainMap) {
 }
 
 // A motion the views cannot be placed along is refused before anything changes.
-TEST(BlurModel, RefusesAMotionWithoutViewsOrNotFinite) {
-  gslam::test::TempDir dir;
-  const BlurredFrame b = fastest_blurred_frame(dir.path());
-  const Eigen::Isometry3d T_cam_world = b.blurred.entries[b.index].T_world_cam_truth->inverse();
-  auto rasterizer = splat::make_cpu_rasterizer();
-  const splat::RgbdFrame frame = b.blurred.load(b.index);
+TEST_F(BlurModel, RefusesAMotionWithoutViewsOrNotFinite) {
   splat::Vector6d nan_twist = splat::Vector6d::Zero();
   nan_twist[3] = std::nan("");
   EXPECT_THROW(refined_map(*rasterizer, frame, T_cam_world, 1, {splat::Vector6d::Zero(), 0}), splat::Error);
