@@ -139,6 +139,16 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
     }
     request.answer(true, "map and trajectory cleared; the next frame starts a new map");
   };
+  // Between frames the viewer and the host are given the map that mapping has made since.
+  auto show_latest_map = [&] {
+    std::shared_ptr<const splat::Gaussians> map = live->map();
+    {
+      std::lock_guard lock(shared.mutex);
+      if (map == shared.view.map) return;
+      shared.view.map = map;
+    }
+    if (host) host->map_changed(std::move(map));
+  };
   auto pipeline = [&] {
     Progress progress("live", 0, "frames");
     Clock::time_point last_checkpoint = Clock::now();
@@ -149,6 +159,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
       std::optional<ArrivedFrame> arrived = source->next(std::chrono::milliseconds(100));
       if (!arrived) {
         if (source->finished()) break;
+        show_latest_map();
         continue;
       }
       bool paused = false, snapshot = false;

@@ -194,6 +194,11 @@ class RosHost final : public LiveHost {
     }
   }
 
+  void map_changed(std::shared_ptr<const splat::Gaussians> map) override {
+    std::lock_guard lock(draw_mutex_);
+    if (latest_) latest_->map = std::move(map);
+  }
+
   std::optional<LiveRequest> next_request() override {
     std::lock_guard lock(request_mutex_);
     if (requests_.empty()) return std::nullopt;
