@@ -65,13 +65,15 @@ for suite in "${suites[@]}"; do
   aarch64-linux-gnu-readelf -h "$build/tests/$suite" | grep -q AArch64 || { echo "$suite is not an arm64 binary"; exit 1; }
 done
 # Left out under emulation: the three longest rasterizer-bound runs (6, 3 and 3 minutes under
-# qemu on 2 cores) and the two that generate blurred sequences (7.6 and 2.2 minutes). The code
-# they drive is covered here by splat_tests and the other tracking and mapping tests (tracking
-# through the rasterizer by DonutTracking's Gauss-Newton test, the blur-aware weight and the
-# exposure estimate by their smaller tests), and natively by the main suite.
+# qemu on 2 cores), the two that generate blurred sequences (7.6 and 2.2 minutes) and the blur
+# model's fit of a map through a frame's motion (7.4 minutes). The code they drive is covered
+# here by splat_tests and the other tracking and mapping tests (tracking through the rasterizer
+# by DonutTracking's Gauss-Newton test, the blur-aware weight, the exposure estimate and the blur
+# model by their smaller tests), and natively by the main suite.
 slow='^(Vignetting\.RefinementLearnsTheFramesFallOffAndNoneWhereThereIsNone|DonutTracking\.ConvergesFromThreeCentimetresAndTwoDegrees'
 slow+='|DonutTracking\.ConvergesFromTenCentimetresAndTenDegreesCoarseToFine'
-slow+='|ExposureEstimate\.MeasuresTheExposureTheFramesWereBlurredOver|RgbdOdometry\.BlurAwareDepthWeightAlignsBlurredFramesBetter)$'
+slow+='|ExposureEstimate\.MeasuresTheExposureTheFramesWereBlurredOver|RgbdOdometry\.BlurAwareDepthWeightAlignsBlurredFramesBetter'
+slow+='|BlurModel\.FramesFittedThroughTheirMotionLeaveASharperMap)$'
 labels=$(IFS='|'; echo "^(${suites[*]})$")
 ctest --test-dir "$build" --output-on-failure --timeout 1200 -j "$(nproc)" -L "$labels" -E "$slow"
 # The Vulkan backend on Mesa's arm64 lavapipe from the sysroot (the run above skips its tests:
