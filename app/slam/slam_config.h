@@ -81,7 +81,7 @@ struct SlamConfig {
   // The first this many passes also densify each visited frame, covering what no keyframe saw.
   int refine_densify_passes = 1;
   // Blurred frames are rendered as the camera recorded them: the mean of views across the
-  // exposure (one per 2 pixels of blur at the sweep's resolution, up to this many), the motion
+  // exposure (one per pixel of blur at the sweep's resolution, up to this many), the motion
   // from the trajectory about the frame over the nominal odometry.exposure (tracking's estimate
   // of it was 8.7x that on 7-Scenes, docs/tuning.md). 1: no blur model.
   int refine_blur_samples = 1;
