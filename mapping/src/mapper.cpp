@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "mapping/depth_holes.h"
@@ -372,13 +373,13 @@ void Mapper::count_free_space(const std::vector<splat::FreeSpace>& verdicts, std
   }
 }
 
-Mapper::Pruned Mapper::prune() {
+Mapper::Pruned Mapper::prune(bool oversized) {
   const std::size_t n = size();
   std::vector<uint8_t> keep(n, 1);
   seen_through_.resize(n, 0);
   seen_on_.resize(n, 0);
   const float min_logit = static_cast<float>(std::log(config_.prune_opacity / (1 - config_.prune_opacity)));
-  const float max_log_scale = static_cast<float>(std::log(config_.prune_max_scale));
+  const float max_log_scale = oversized ? static_cast<float>(std::log(config_.prune_max_scale)) : std::numeric_limits<float>::infinity();
   // Faint or oversized: tested where the map is.
   std::vector<uint8_t> removable;
   if (device_ && !host_current_) {

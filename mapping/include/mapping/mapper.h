@@ -169,12 +169,12 @@ class Mapper {
   // count themselves; the final sweep has every frame (as refinement_frame() made it) counted
   // before it starts and again after its densifying passes, for the Gaussians from `first` on.
   void observe_free_space(const splat::RgbdFrame& frame, const Eigen::Isometry3d& T_cam_world, std::size_t first = 0);
-  // Removes transparent, oversized and ghost Gaussians; returns how many, and how many of them
-  // were ghosts.
+  // Removes transparent, oversized (larger than prune_max_scale, unless `oversized` is false)
+  // and ghost Gaussians; returns how many, and how many of them were ghosts.
   struct Pruned {
     std::size_t gaussians = 0, ghosts = 0;
   };
-  Pruned prune();
+  Pruned prune(bool oversized = true);
   // Moves keyframes, and the Gaussians each seeded, rigidly: keyframe number k (and what it
   // anchors) by world_correction[k] (T_world_new * T_world_old^-1), for every keyframe added so
   // far. Gaussians seeded by the final refinement are anchored to the keyframe last added.
