@@ -80,12 +80,16 @@ echo "|---|---|---|---|---|"
 status=0
 for t in "${targets[@]}"; do
   log="$build/fuzz_$t.log"
-  if "$build/tests/fuzz/fuzz_$t" "$build/corpus/$t" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
+  # The targets write each input to a file in TMPDIR: a folder of the build's, removed after.
+  scratch="$build/scratch_$t"
+  mkdir -p "$scratch"
+  if TMPDIR="$scratch" "$build/tests/fuzz/fuzz_$t" "$build/corpus/$t" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
        -rss_limit_mb=1024 -artifact_prefix="$build/findings/$t-" -print_final_stats=1 > "$log" 2>&1; then
     result=clean
   else
     result="FAILED (see $log)"; status=1
   fi
+  rm -rf "$scratch"
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
   echo "| $t | $seconds | $runs | $((runs / seconds)) | $result |"
 done

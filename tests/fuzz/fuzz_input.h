@@ -1,5 +1,6 @@
 // Shared by the libFuzzer targets: the readers take paths, so each input is written to a file in
-// a per-process folder first. A splat::Error is the expected answer to bad input; anything else
+// a per-process folder first (under TMPDIR, which scripts/fuzz.sh points into the build and
+// removes after each target). A splat::Error is the expected answer to bad input; anything else
 // (a crash, a sanitizer report, another exception) is a finding.
 #pragma once
 #include <unistd.h>
