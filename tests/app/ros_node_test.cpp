@@ -153,13 +153,17 @@ NodeRun start_node_with_teddy_bag(const std::vector<std::string>& args, std::str
   return r;
 }
 
-// rosbag play at the recording's rate, publishing the simulated clock; `topics` of the bag.
-int play_bag(RosGraph& graph, const std::filesystem::path& bag, const std::vector<std::string>& topics) {
-  std::vector<std::string> args = {"rosbag", "play", "--clock", "--hz=1000", "--wait-for-subscribers", "-q", "--topics"};
+// rosbag play at the recording's rate, publishing the simulated clock; `topics` of the bag, its
+// output in `log`. It stays up past the bag's end (--keep-alive) until the test has seen what it
+// waits for and stops it: a player that exits at the end can take its last messages with it,
+// still queued for a subscriber that a loaded machine has not read them from yet.
+pid_t start_player(RosGraph& graph, const std::filesystem::path& bag, const std::vector<std::string>& topics,
+                   const std::string& log) {
+  std::vector<std::string> args = {"rosbag", "play", "--clock", "--hz=1000", "--wait-for-subscribers", "--keep-alive", "-q", "--topics"};
   args.insert(args.end(), topics.begin(), topics.end());
   args.push_back("--bags");
   args.push_back(bag.string());
-  return graph.wait(graph.spawn(args, "play.log"));
+  return graph.spawn(args, log);
 }
 const std::vector<std::string> kImageTopics = {"/camera/rgb/image_color", "/camera/depth/image",
                                                "/camera/rgb/camera_info"};
@@ -237,9 +241,11 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   const pid_t node = r.node;
   gslam::test::write_teddy_bag(teddy, 0, kFrames, first);
   gslam::test::write_teddy_bag(teddy, kFrames, kFrames, second);
-  ASSERT_EQ(play_bag(*graph, first, kImageTopics), 0) << gslam::test::read_text(graph->dir() / "play.log");
+  const pid_t first_player = start_player(*graph, first, kImageTopics, "play_first.log");
   const std::vector<PublishedPose> first_poses = wait_for_poses(tf, kFrames);
-  ASSERT_EQ(first_poses.size(), std::size_t(kFrames)) << gslam::test::read_text(graph->dir() / "node.log");
+  graph->interrupt(first_player);
+  ASSERT_EQ(first_poses.size(), std::size_t(kFrames))
+      << gslam::test::read_text(graph->dir() / "node.log") << gslam::test::read_text(graph->dir() / "play_first.log");
   for (int i = 0; i < kFrames; ++i) {  // each pose carries its colour image's stamp
     EXPECT_NEAR(first_poses[std::size_t(i)].stamp, teddy.entries[std::size_t(i)].timestamp, 1e-6) << "frame " << i;
     EXPECT_EQ(first_poses[std::size_t(i)].child, "camera") << "the bag's images have no frame_id";
@@ -258,9 +264,11 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   const auto reset = graph->run("rosservice call /gslam/reset");
   EXPECT_NE(reset.output.find("success: True"), std::string::npos) << reset.output;
 
-  ASSERT_EQ(play_bag(*graph, second, kImageTopics), 0) << gslam::test::read_text(graph->dir() / "play.log");
+  const pid_t second_player = start_player(*graph, second, kImageTopics, "play_second.log");
   const std::vector<PublishedPose> poses = wait_for_poses(tf, 2 * kFrames);
-  ASSERT_EQ(poses.size(), std::size_t(2 * kFrames)) << gslam::test::read_text(graph->dir() / "node.log");
+  graph->interrupt(second_player);
+  ASSERT_EQ(poses.size(), std::size_t(2 * kFrames))
+      << gslam::test::read_text(graph->dir() / "node.log") << gslam::test::read_text(graph->dir() / "play_second.log");
   EXPECT_EQ(graph->interrupt(node), 0) << gslam::test::read_text(graph->dir() / "node.log");
 
   // The run folder is the second bag's run, complete as `gslam live` writes it.
@@ -312,7 +320,7 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
   std::vector<std::string> topics = kImageTopics;
   topics.insert(topics.end(), {"/tf", "/tf_static"});
-  ASSERT_EQ(play_bag(*r.graph, r.bag, topics), 0) << gslam::test::read_text(r.graph->dir() / "play.log");
+  const pid_t player = start_player(*r.graph, r.bag, topics, "play.log");
   // Every frame is tracked (as ~save writes the run folder, between frames); a pose goes on /tf
   // where odometry covers its stamp.
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
@@ -321,7 +329,8 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
     if (r.graph->run("rosservice call /gslam/save").output.find("success: True") != std::string::npos)
       tracked = app::read_tum_trajectory(r.run / "trajectory.txt").size();
   }
-  EXPECT_EQ(tracked, std::size_t(kFrames)) << r.log();
+  r.graph->interrupt(player);
+  EXPECT_EQ(tracked, std::size_t(kFrames)) << r.log() << gslam::test::read_text(r.graph->dir() / "play.log");
   EXPECT_EQ(r.graph->interrupt(r.node), 0) << r.log();
   const std::vector<PublishedPose> poses = published_poses(r.tf);
   EXPECT_GT(poses.size(), std::size_t(kFrames / 2)) << r.log();
