@@ -116,7 +116,12 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       break;
     }
     if (v == visits.densifying && v > 0) carve(seeded_from);
-    if (next == order.size()) std::shuffle(order.begin(), order.end(), rng), next = 0;
+    if (next == order.size()) {
+      // The oversized go as the last round begins, so that its visits fill where they were; after
+      // the last visit only the transparent do (docs/tuning.md).
+      if (v > visits.densifying && visits.total - v <= order.size()) prune_map(true);
+      std::shuffle(order.begin(), order.end(), rng), next = 0;
+    }
     const std::size_t i = order[next++];
     Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
     mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
@@ -125,9 +130,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     if (mapper_.size() != published) publish(), published = mapper_.size();
     if (visited) visited(++result.visits, visits.total);
   }
-  // The oversized stay: no visit is left to fill where they were (docs/tuning.md, 2.5 dB on a
-  // long sequence).
-  prune_map(false);
+  prune_map(false);  // no visit is left to fill where an oversized one was
   mapper_.release_sweep_frames();
   if (config_.relocalize_iterations > 0) {
     tracking::TrackingConfig t = config_.tracking;
