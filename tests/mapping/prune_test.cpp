@@ -1,5 +1,5 @@
-// Pruning: faint Gaussians always go; oversized ones only when asked, as the final sweep's last
-// prune keeps them (no visit is left to fill where they were).
+// Pruning: faint Gaussians always go; oversized ones only when asked, as the final sweep's prune
+// after its last visit keeps them (no visit is left to fill where they were).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -35,14 +35,13 @@ void check_pruning(splat::Rasterizer& rasterizer) {
   const std::size_t n = state.map.size();
   mapping::Mapper mapper(rasterizer, config);
   mapper.restore(std::move(state), [&](std::size_t) { return frame; });
-  auto count_scale = [&](float log_scale) {
-    const std::vector<float>& s = mapper.map().log_scales;
-    return std::count(s.begin(), s.end(), log_scale);
+  // How many of the map's values in `field` equal `value`.
+  auto count = [&](std::vector<float> splat::Gaussians::*field, float value) {
+    const std::vector<float>& values = mapper.map().*field;
+    return std::count(values.begin(), values.end(), value);
   };
-  auto count_opacity = [&](float logit) {
-    const std::vector<float>& a = mapper.map().opacity_logits;
-    return std::count(a.begin(), a.end(), logit);
-  };
+  auto count_scale = [&](float log_scale) { return count(&splat::Gaussians::log_scales, log_scale); };
+  auto count_opacity = [&](float logit) { return count(&splat::Gaussians::opacity_logits, logit); };
   ASSERT_EQ(count_scale(big), 1);
   ASSERT_EQ(count_opacity(faint), 1);
 
