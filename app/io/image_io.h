@@ -46,8 +46,8 @@ splat::Image16 read_png_gray16(const std::filesystem::path& path);
 splat::Image16 read_png_labels(const std::filesystem::path& path);
 
 // A rendering in one EXR file as compositing tools expect it: R, G, B linear light (the sRGB
-// transfer removed) premultiplied by A, and Z (depth in metres, 0 where nothing was hit), all
-// 32-bit float. `rgb` is the render as displayed, composited over `background`; it is taken off
+// transfer removed) premultiplied by A, as 16-bit floats, and Z (depth in metres, 0 where
+// nothing was hit) as a 32-bit float. `rgb` is the render as displayed, composited over `background`; it is taken off
 // again, and the colour under each pixel's alpha linearized (exact where one surface covers the
 // pixel, an approximation along edges). Atomic.
 void write_render_exr(const std::filesystem::path& path, int width, int height,

@@ -1,5 +1,6 @@
 #include "mapping/gaussian_adam.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -71,7 +72,8 @@ void GaussianAdam::ensure_layout(const splat::Gaussians& map) {
   }
 }
 
-void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale) {
+void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale,
+                        splat::ThreadPool* pool) {
   ensure_layout(map);
   splat::validate_sizes(splat::GaussiansView(grads), "GaussianAdam::step gradients");
   if (grads.size() != map.size() || grads.sh_degree != map.sh_degree) {
@@ -81,44 +83,45 @@ void GaussianAdam::step(splat::Gaussians& map, const splat::GaussianGrads& grads
   const std::size_t n = map.size();
   // Bias corrections per Gaussian. Step counts repeat across the map (Gaussians added
   // together share them), so the powers of each count are computed once and kept.
-  std::vector<double> bias1(n), bias2(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const uint32_t t = ++steps_[i];
-    while (beta1_powers_.size() <= t) {
-      beta1_powers_.push_back(std::pow(config_.hyper.beta1, double(beta1_powers_.size())));
-      beta2_powers_.push_back(std::pow(config_.hyper.beta2, double(beta2_powers_.size())));
-    }
-    bias1[i] = 1 - beta1_powers_[t];
-    bias2[i] = 1 - beta2_powers_[t];
+  uint32_t most = 0;
+  for (uint32_t& t : steps_) most = std::max(most, ++t);
+  while (beta1_powers_.size() <= most) {
+    beta1_powers_.push_back(std::pow(config_.hyper.beta1, double(beta1_powers_.size())));
+    beta2_powers_.push_back(std::pow(config_.hyper.beta2, double(beta2_powers_.size())));
   }
-  for (splat::ParamGroup group : splat::kAllParamGroups) {
-    std::vector<float>& p = splat::param_group(map, group);
-    const std::vector<float>& g = splat::param_group(grads, group);
-    std::vector<float>& m = splat::param_group(m_, group);
-    std::vector<float>& v = splat::param_group(v_, group);
-    const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, map.sh_degree));
-    // Column by column, so the Gaussians' loop vectorizes (strided by the group's width).
-    for (std::size_t c = 0; c < width; ++c) {
-      double lr = 0;
-      switch (group) {
-        case splat::ParamGroup::kMeans: lr = config_.means; break;
-        case splat::ParamGroup::kLogScales: lr = config_.log_scales; break;
-        case splat::ParamGroup::kRotations: lr = config_.rotations; break;
-        case splat::ParamGroup::kOpacityLogits: lr = config_.opacity_logits; break;
-        case splat::ParamGroup::kSh: lr = c < 3 ? config_.sh_dc : config_.sh_rest; break;
-      }
-      lr *= lr_scale;
-      float* pc = p.data() + c;
-      const float* gc = g.data() + c;
-      float* mc = m.data() + c;
-      float* vc = v.data() + c;
+  constexpr std::size_t kChunk = 4096;
+  splat::parallel_for(pool, (n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    const std::size_t begin = chunk * kChunk, count = std::min(n, begin + kChunk) - begin;
+    double bias1[kChunk], bias2[kChunk];
+    for (std::size_t i = 0; i < count; ++i) {
+      bias1[i] = 1 - beta1_powers_[steps_[begin + i]];
+      bias2[i] = 1 - beta2_powers_[steps_[begin + i]];
+    }
+    for (splat::ParamGroup group : splat::kAllParamGroups) {
+      const std::size_t width = static_cast<std::size_t>(splat::param_group_width(group, map.sh_degree));
+      float* p = splat::param_group(map, group).data() + begin * width;
+      const float* g = splat::param_group(grads, group).data() + begin * width;
+      float* m = splat::param_group(m_, group).data() + begin * width;
+      float* v = splat::param_group(v_, group).data() + begin * width;
+      // Column by column, so the Gaussians' loop vectorizes (strided by the group's width).
+      for (std::size_t c = 0; c < width; ++c) {
+        double lr = 0;
+        switch (group) {
+          case splat::ParamGroup::kMeans: lr = config_.means; break;
+          case splat::ParamGroup::kLogScales: lr = config_.log_scales; break;
+          case splat::ParamGroup::kRotations: lr = config_.rotations; break;
+          case splat::ParamGroup::kOpacityLogits: lr = config_.opacity_logits; break;
+          case splat::ParamGroup::kSh: lr = c < 3 ? config_.sh_dc : config_.sh_rest; break;
+        }
+        lr *= lr_scale;
 #pragma omp simd
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t j = i * width;
-        splat::adam_update(pc[j], gc[j], mc[j], vc[j], lr, bias1[i], bias2[i], config_.hyper);
+        for (std::size_t i = 0; i < count; ++i) {
+          const std::size_t j = i * width + c;
+          splat::adam_update(p[j], g[j], m[j], v[j], lr, bias1[i], bias2[i], config_.hyper);
+        }
       }
     }
-  }
+  });
 }
 
 }  // namespace mapping

@@ -281,7 +281,8 @@ splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
   splat::MappingStepResult result;
   result.loss = splat::l1_loss<float>(colour, target_rgb, 3, {}, d.rgb, config_.color_weight);
   if (config_.ssim_weight > 0) {
-    result.loss += splat::dssim_loss<float>(colour, target_rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight);
+    result.loss += splat::dssim_loss<float>(colour, target_rgb, f.width(), f.height(), 3, d.rgb, config_.ssim_weight,
+                                            rasterizer_.host_threads());
   }
   if (vignetted) result.d_loss_d_vignetting = vignetting_.backward(render.rgb, d.rgb, f.camera);
   d.alpha.assign(render.alpha.size(), 0.f);
@@ -315,7 +316,7 @@ splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
     }
     std::fill(grads.rotations.begin(), grads.rotations.end(), 0.f);
   }
-  adam_.step(map_, grads, step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale);
+  adam_.step(map_, grads, step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale, rasterizer_.host_threads());
   return result;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "splat/error.h"
+#include "splat/thread_pool.h"
 
 namespace splat {
 namespace {
@@ -159,49 +160,76 @@ double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alp
 
 template <typename T>
 double dssim_loss(std::span<const T> pred, std::span<const T> target, int width, int height,
-                  int channels, std::span<T> grad, double weight) {
+                  int channels, std::span<T> grad, double weight, ThreadPool* pool) {
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
   if (width < 1 || height < 1 || channels < 1) throw Error("dssim_loss: empty image");
   check_sizes<T>("dssim_loss", pred.size(), target.size(), grad.size(), 0, pixels);
   if (pred.size() != pixels * channels) throw Error("dssim_loss: image size does not match " + std::to_string(width) + "x" + std::to_string(height));
   constexpr T kC1 = T(0.01 * 0.01), kC2 = T(0.03 * 0.03);
   const T scale = static_cast<T>(weight / static_cast<double>(pixels * channels));
-  double ssim_sum = 0;
-  std::vector<T> x(pixels), y(pixels), xx(pixels), yy(pixels), xy(pixels), tmp;
-  std::vector<T> mx, my, exx, eyy, exy, da(pixels), db(pixels), dc(pixels), ga, gb, gc;
-  for (int c = 0; c < channels; ++c) {
+  const std::size_t planes = static_cast<std::size_t>(channels);
+  // The work comes in independent items (blurs, bands of rows), each computing what the
+  // serial order computed, so the result is the same with any number of threads.
+  const std::size_t bands = std::min<std::size_t>(static_cast<std::size_t>(height), 16);
+  auto band_rows = [&](std::size_t b) {
+    return std::pair{pixels * b / bands / width * width, pixels * (b + 1) / bands / width * width};
+  };
+  // The local statistics of each channel: blurs of x, y, x^2, y^2 and xy.
+  enum Stat { kMx, kMy, kExx, kEyy, kExy, kStats };
+  std::vector<std::vector<T>> stats(planes * kStats), scratch(planes * kStats);
+  parallel_for(pool, planes * kStats, [&](std::size_t item) {
+    const std::size_t c = item / kStats;
+    const Stat stat = static_cast<Stat>(item % kStats);
+    std::vector<T>& in = scratch[item];
+    in.resize(pixels);
     for (std::size_t p = 0; p < pixels; ++p) {
-      x[p] = pred[p * channels + c];
-      y[p] = target[p * channels + c];
-      xx[p] = x[p] * x[p];
-      yy[p] = y[p] * y[p];
-      xy[p] = x[p] * y[p];
+      const T x = pred[p * planes + c], y = target[p * planes + c];
+      in[p] = stat == kMx ? x : stat == kMy ? y : stat == kExx ? x * x : stat == kEyy ? y * y : x * y;
     }
-    blur(x, mx, tmp, width, height);
-    blur(y, my, tmp, width, height);
-    blur(xx, exx, tmp, width, height);
-    blur(yy, eyy, tmp, width, height);
-    blur(xy, exy, tmp, width, height);
-    for (std::size_t p = 0; p < pixels; ++p) {
+    std::vector<T> tmp;
+    blur(in, stats[item], tmp, width, height);
+  });
+  // SSIM per pixel, and dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) times dLoss/dS = -scale.
+  std::vector<T> ssim(pixels * planes);
+  enum Partial { kDa, kDb, kDc, kPartials };
+  std::vector<std::vector<T>> partials(planes * kPartials, std::vector<T>(pixels));
+  parallel_for(pool, planes * bands, [&](std::size_t item) {
+    const std::size_t c = item / bands;
+    const auto [begin, end] = band_rows(item % bands);
+    const std::vector<T>* st = &stats[c * kStats];
+    const T *mx = st[kMx].data(), *my = st[kMy].data(), *exx = st[kExx].data(), *eyy = st[kEyy].data(), *exy = st[kExy].data();
+    T *da = partials[c * kPartials + kDa].data(), *db = partials[c * kPartials + kDb].data(), *dc = partials[c * kPartials + kDc].data();
+    for (std::size_t p = begin; p < end; ++p) {
       const T a1 = 2 * mx[p] * my[p] + kC1, a2 = 2 * (exy[p] - mx[p] * my[p]) + kC2;
       const T b1 = mx[p] * mx[p] + my[p] * my[p] + kC1;
       const T b2 = exx[p] - mx[p] * mx[p] + eyy[p] - my[p] * my[p] + kC2;
       const T inv_b = 1 / (b1 * b2);
       const T s = a1 * a2 * inv_b;
-      ssim_sum += s;
-      // dS/d(mu_x), dS/d(E[x^2]) and dS/d(E[xy]) at this pixel, times dLoss/dS = -scale. Written
-      // without dividing by a1 or a2: a2 (twice the covariance plus C2) can be exactly 0, and
-      // s / a2 as s * (1 / a2) is then 0 * inf.
+      ssim[c * pixels + p] = s;
+      // Written without dividing by a1 or a2: a2 (twice the covariance plus C2) can be exactly
+      // 0, and s / a2 as s * (1 / a2) is then 0 * inf.
       da[p] = -scale * (2 * my[p] * (a2 - a1) * inv_b + s * (2 * mx[p] / b2 - 2 * mx[p] / b1));
       db[p] = -scale * s * (-1 / b2);
       dc[p] = -scale * 2 * a1 * inv_b;
     }
-    // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
-    blur(da, ga, tmp, width, height);
-    blur(db, gb, tmp, width, height);
-    blur(dc, gc, tmp, width, height);
-    for (std::size_t p = 0; p < pixels; ++p) grad[p * channels + c] += ga[p] + 2 * x[p] * gb[p] + y[p] * gc[p];
-  }
+  });
+  // The local statistics are blurs of x, x^2 and xy; the blur is its own adjoint.
+  parallel_for(pool, planes * kPartials, [&](std::size_t item) {
+    std::vector<T> tmp;
+    blur(partials[item], scratch[item], tmp, width, height);
+  });
+  parallel_for(pool, bands, [&](std::size_t b) {
+    const auto [begin, end] = band_rows(b);
+    for (std::size_t c = 0; c < planes; ++c) {
+      const T *ga = scratch[c * kPartials + kDa].data(), *gb = scratch[c * kPartials + kDb].data(), *gc = scratch[c * kPartials + kDc].data();
+      for (std::size_t p = begin; p < end; ++p) {
+        const T x = pred[p * planes + c], y = target[p * planes + c];
+        grad[p * planes + c] += ga[p] + 2 * x * gb[p] + y * gc[p];
+      }
+    }
+  });
+  double ssim_sum = 0;  // in one fixed order
+  for (const T s : ssim) ssim_sum += s;
   return weight * (1 - ssim_sum / static_cast<double>(pixels * channels));
 }
 
@@ -229,7 +257,7 @@ double psnr(std::span<const float> pred, std::span<const float> target, int chan
                                            std::span<const T>, double, std::span<T>, std::span<T>, \
                                            double);                                              \
   template double dssim_loss(std::span<const T>, std::span<const T>, int, int, int, std::span<T>, \
-                             double);                                                             \
+                             double, ThreadPool*);                                                \
   template void alpha_mask(std::span<const T>, T, std::span<T>);
 GSLAM_INSTANTIATE(float)
 GSLAM_INSTANTIATE(double)

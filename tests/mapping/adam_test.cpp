@@ -71,6 +71,23 @@ TEST(GaussianAdam, StateStaysAlignedWhenGaussiansAreRemovedAndAppended) {
   EXPECT_EQ(adam.steps()[4], 1u) << "new Gaussians start their own bias correction";
 }
 
+// Steps on a pool (ranges of Gaussians on each thread) move every parameter and moment exactly
+// as serial steps do; 10,000 Gaussians span several ranges, the last one partial.
+TEST(GaussianAdam, StepsOnThreadsEqualSerialSteps) {
+  splat::Gaussians serial = map_of(10000), threaded = serial;
+  mapping::GaussianAdam serial_adam, threaded_adam;
+  splat::ThreadPool pool(3);
+  for (int step = 0; step < 3; ++step) {
+    serial_adam.step(serial, grads_for(serial), 0.5);
+    threaded_adam.step(threaded, grads_for(threaded), 0.5, &pool);
+  }
+  for (splat::ParamGroup group : splat::kAllParamGroups) {
+    EXPECT_EQ(splat::param_group(threaded, group), splat::param_group(serial, group)) << splat::param_group_name(group);
+    EXPECT_NE(splat::param_group(threaded, group), splat::param_group(map_of(10000), group)) << "the steps moved it";
+  }
+  EXPECT_EQ(threaded_adam.steps(), serial_adam.steps());
+}
+
 TEST(GaussianAdam, RejectsStateThatNoLongerMatchesTheMap) {
   splat::Gaussians map = map_of(4);
   mapping::GaussianAdam adam;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "splat/losses.h"
+#include "splat/thread_pool.h"
 #include "support/expect_error.h"
 #include "support/gradient_check.h"
 
@@ -98,6 +99,24 @@ TEST(Losses, KnownValues) {
   std::vector<double> grad_d(4, 0.0);
   EXPECT_NEAR(splat::dssim_loss<double>(pred_d, pred_d, 2, 2, 1, grad_d), 0.0, 1e-15) << "identical images, double";
   EXPECT_NEAR(splat::psnr(std::vector<float>(12, 0.5f), std::vector<float>(12, 0.6f), 3), 20.0, 1e-4);
+}
+
+// With a pool the D-SSIM splits its blurs and rows over threads: loss and gradient are the
+// serial ones, bit for bit (results must not depend on the thread count). An odd size, so that
+// bands of rows are uneven.
+TEST(Losses, DssimOnThreadsEqualsSerial) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  const int w = 37, h = 29;
+  std::vector<float> pred(std::size_t(w) * h * 3), target(pred.size());
+  for (std::size_t i = 0; i < pred.size(); ++i) pred[i] = u(rng), target[i] = u(rng);
+  std::vector<float> serial(pred.size(), 0.25f), threaded(pred.size(), 0.25f);
+  const double serial_loss = splat::dssim_loss<float>(pred, target, w, h, 3, serial, 0.2);
+  splat::ThreadPool pool(3);
+  const double threaded_loss = splat::dssim_loss<float>(pred, target, w, h, 3, threaded, 0.2, &pool);
+  EXPECT_EQ(threaded_loss, serial_loss);
+  EXPECT_GT(serial_loss, 0.01);
+  EXPECT_EQ(threaded, serial);
 }
 
 // The float D-SSIM computes in float (the double one is the finite-difference-checked

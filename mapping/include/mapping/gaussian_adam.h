@@ -6,6 +6,7 @@
 
 #include "splat/adam.h"
 #include "splat/gaussians.h"
+#include "splat/thread_pool.h"
 
 namespace mapping {
 
@@ -30,7 +31,9 @@ class GaussianAdam {
   // Applies one step to every Gaussian, with every learning rate times `lr_scale`. Throws
   // splat::Error if the gradient layout differs from the map or the map size differs from the
   // optimizer state.
-  void step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale = 1);
+  // With a pool, ranges of Gaussians step on its threads (the same result).
+  void step(splat::Gaussians& map, const splat::GaussianGrads& grads, double lr_scale = 1,
+            splat::ThreadPool* pool = nullptr);
   // `n` new Gaussians at the end of the map, with zero moments.
   void append(std::size_t n, int sh_degree);
   // Keeps the Gaussians where keep[i] != 0, in order (the caller compacts the map the same way).

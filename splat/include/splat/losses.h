@@ -3,6 +3,8 @@
 
 namespace splat {
 
+class ThreadPool;
+
 // Image losses with their gradients. Images are flat [H, W, C]. Each function returns the
 // weighted loss and ADDS weight * dLoss/dprediction into `grad` (same shape as the prediction),
 // so several losses can share one gradient buffer. `mask` is [H, W] (empty = every pixel);
@@ -36,10 +38,11 @@ double silhouette_depth_l1_loss(std::span<const T> depth, std::span<const T> alp
                                 double weight = 1.0);
 
 // 1 - SSIM, SSIM averaged over pixels and channels, with an 11x11 Gaussian window (sigma 1.5),
-// zero padding at the borders and C1 = 0.01^2, C2 = 0.03^2 (the 3DGS training loss).
+// zero padding at the borders and C1 = 0.01^2, C2 = 0.03^2 (the 3DGS training loss). With a
+// pool its blurs run on the pool's threads, with the same result.
 template <typename T>
 double dssim_loss(std::span<const T> pred, std::span<const T> target, int width, int height,
-                  int channels, std::span<T> grad, double weight = 1.0);
+                  int channels, std::span<T> grad, double weight = 1.0, ThreadPool* pool = nullptr);
 
 // Mask of pixels whose rendered alpha exceeds `threshold` (1 or 0), [H, W].
 template <typename T>

@@ -13,6 +13,8 @@
 
 namespace splat {
 
+class ThreadPool;
+
 class ResidentMap;
 
 struct RenderSettings {
@@ -139,6 +141,9 @@ class Rasterizer {
   // steps move no map over a bus; it must not outlive the rasterizer. Null where the backend
   // works on the host's map anyway (CPU): callers then use forward() and backward().
   virtual std::unique_ptr<ResidentMap> make_resident_map(int sh_degree);
+  // The backend's own worker threads, which the host work between its calls (losses, Adam) may
+  // share while no render runs; null where the backend keeps none (Vulkan).
+  virtual ThreadPool* host_threads() { return nullptr; }
 };
 
 // Throws splat::Error unless every non-empty image gradient has the forward result's size.

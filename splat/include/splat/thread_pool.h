@@ -40,4 +40,13 @@ class ThreadPool {
   std::exception_ptr error_;
 };
 
+// fn(i) for every i in [0, n): on the pool where there is one, else in order on this thread.
+inline void parallel_for(ThreadPool* pool, std::size_t n, const std::function<void(std::size_t)>& fn) {
+  if (pool != nullptr) {
+    pool->parallel_for(n, fn);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) fn(i);
+  }
+}
+
 }  // namespace splat

@@ -30,6 +30,7 @@ class CpuRasterizer final : public Rasterizer {
 
   std::map<std::string, double> stage_times_ms() const override { return stage_times_; }
   void reset_stage_times() override { stage_times_.clear(); }
+  ThreadPool* host_threads() override { return &pool_; }
 
  private:
   ThreadPool pool_;
