@@ -287,7 +287,7 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
                          " have no depth image on " + depth.topic + " within 0.02 s");
   }
   for (const auto& [c, k] : pairs)
-    d.entries.push_back({colour.index[c].stamp, path, path, std::nullopt});
+    d.entries.push_back({colour.index[c].stamp, path, path, std::nullopt, depth.index[k].stamp - colour.index[c].stamp});
   if (d.entries.empty()) {
     fail(path, "no frame has both colour and depth (" + std::to_string(colour.index.size()) +
                    " on " + colour.topic + ", " + std::to_string(depth.index.size()) + " on " +

@@ -126,7 +126,8 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
                          " colour images have no depth image within 0.02 s");
   }
   for (const auto& [i, j] : pairs) {
-    d.entries.push_back({rgb[i].timestamp, root / rgb[i].file, root / depth[j].file, std::nullopt});
+    d.entries.push_back({rgb[i].timestamp, root / rgb[i].file, root / depth[j].file, std::nullopt,
+                         depth[j].timestamp - rgb[i].timestamp});
   }
   attach_ground_truth(d, root / "groundtruth.txt");
   return d;
@@ -390,6 +391,7 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
   if (store) {
     splat::RgbdFrame f = store->load(i, intrinsics, depth_scale);
     f.timestamp = e.timestamp;
+    f.depth_time_offset = e.depth_offset;
     return f;
   }
   const splat::Image8 rgb = read_rgb8(e.rgb);
@@ -404,6 +406,7 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
   }
   splat::RgbdFrame f;
   f.timestamp = e.timestamp;
+  f.depth_time_offset = e.depth_offset;
   f.camera = intrinsics;
   f.rgb.resize(rgb.data.size());
   for (std::size_t k = 0; k < rgb.data.size(); ++k) f.rgb[k] = static_cast<float>(rgb.data[k]) / 255.f;

@@ -28,6 +28,7 @@ struct DatasetEntry {
   double timestamp = 0;
   std::filesystem::path rgb, depth;
   std::optional<Eigen::Isometry3d> T_world_cam_truth;  // ground truth, camera to world
+  double depth_offset = 0;  // the depth image's timestamp minus the colour image's, seconds
 };
 
 // Frames kept inside one file (a ROS bag, an MCAP file) rather than as image files: entry i of a

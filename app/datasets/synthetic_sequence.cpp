@@ -291,9 +291,9 @@ SyntheticOptions SyntheticOptions::hard_motion() {
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
   if (o.frames < 1 || o.width < 8 || o.height < 8) throw splat::Error("synthetic sequence: bad size or frame count");
   if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) || !(o.depth_holes >= 0 && o.depth_holes < 1) ||
-      !(o.shake_peak_rate >= 0) || !(o.fps > 0)) {
+      !(o.shake_peak_rate >= 0) || !(o.fps > 0) || !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps)) {
     throw splat::Error("synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake and "
-                       "holes below 1 expected");
+                       "holes below 1, depth lag under half a frame expected");
   }
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> gauss(0, 1);
@@ -335,17 +335,21 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
       }
     });
-    // Depth and labels at the pixel centres, mid-exposure.
+    // Depth and labels at the pixel centres, mid-exposure, at the depth camera's instant: its
+    // offset from the colour's sweeps the lag's range every 23 frames (two clocks a little apart).
+    const double phase = std::fmod(f / 23.0 + 0.5, 1.0);
+    const double depth_seconds = seconds + o.depth_lag * (2 * phase - 1), depth_timestamp = 1000.0 + depth_seconds;
+    const Eigen::Isometry3d depth_pose = o.depth_lag > 0 ? camera_pose(o, depth_seconds) : pose;
     std::vector<double> z_true(static_cast<std::size_t>(o.width) * o.height, 0.0);
     std::vector<uint8_t> moving(z_true.size(), 0), grazing(z_true.size(), 0);
     for (int y = 0; y < o.height; ++y) {
       for (int x = 0; x < o.width; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
-        const Vector3d ray = (pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
+        const Vector3d ray = (depth_pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
         Hit hit;
-        trace(scene, o, pose.translation(), ray, seconds, hit);
+        trace(scene, o, depth_pose.translation(), ray, o.depth_lag > 0 ? depth_seconds : seconds, hit);
         if (!std::isfinite(hit.t)) continue;
-        z_true[i] = (pose.inverse() * hit.point).z();
+        z_true[i] = (depth_pose.inverse() * hit.point).z();
         labels.at(x, y) = hit.label;
         moving[i] = hit.moving;
         grazing[i] = std::abs(hit.normal.dot(ray)) < std::cos(80 * M_PI / 180);
@@ -364,13 +368,14 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         depth.at(x, y) = static_cast<uint16_t>(std::clamp(std::lround(z * 5000.0), 0L, 65535L));
       }
     }
-    char name[64];
+    char name[64], depth_name[64];
     std::snprintf(name, sizeof(name), "%.6f.png", timestamp);
+    std::snprintf(depth_name, sizeof(depth_name), "%.6f.png", o.depth_lag > 0 ? depth_timestamp : timestamp);
     write_png_rgb(dir / "rgb" / name, o.width, o.height, rgb);
-    write_png_gray16(dir / "depth" / name, depth);
+    write_png_gray16(dir / "depth" / depth_name, depth);
     if (o.labels) write_png_gray16(dir / "labels" / name, labels);
     rgb_list += std::string(name, name + std::strlen(name) - 4) + " rgb/" + name + "\n";
-    depth_list += std::string(name, name + std::strlen(name) - 4) + " depth/" + name + "\n";
+    depth_list += std::string(depth_name, depth_name + std::strlen(depth_name) - 4) + " depth/" + depth_name + "\n";
     truth.push_back({timestamp, pose});
   }
   auto write_text = [&](const std::filesystem::path& path, const std::string& text) {

@@ -33,6 +33,10 @@ struct SyntheticOptions {
   // pixels, plus every pixel whose surface is seen at more than 80 degrees.
   double depth_noise = 0;
   double depth_holes = 0;
+  // Depth from a free-running camera (Kinect v1 in TUM's fr1/fr2): each depth image is taken up
+  // to this many seconds before or after the colour image it pairs with, the offset drifting
+  // through that range, and stamped with its own time. 0: taken together.
+  double depth_lag = 0;
   // Moving objects (for the arc path): a person walking across the view, a chair pushed a metre
   // and left, a crate that appears (see Movers in the .cpp), with depth lost along their edges.
   bool movers = false;

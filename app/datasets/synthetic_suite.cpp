@@ -16,6 +16,10 @@ std::vector<SyntheticCase> hard_case_suite() {
   o.frames = 200;
   add("fast_rotation", "200 frames, 2.2 rad/s, 1/60 s exposure, Kinect noise, 5% holes", o);
 
+  o.depth_lag = 0.015;
+  add("unsynced_depth", "fast_rotation with each depth image up to 15 ms before or after its colour (Kinect v1)", o);
+  o.depth_lag = 0;
+
   o.shake_peak_rate = 3.0;
   o.exposure = 1.0 / 30;
   o.depth_holes = 0.15;

@@ -93,6 +93,9 @@ json frames_to_json(const std::vector<SlamSystem::FramePose>& frames) {
     j.push_back({{"keyframe", f.keyframe == SlamSystem::kNoKeyframe ? json(nullptr) : json(f.keyframe)},
                  {"T_keyframe_cam", pose_to_json(f.T_keyframe_cam)}, {"tracked", f.tracked},
                  {"is_keyframe", f.is_keyframe}, {"held_out", f.held_out}});
+    if (f.T_colour_depth.matrix() != Eigen::Matrix4d::Identity()) {  // depth moved to the colour's instant
+      j.back()["T_colour_depth"] = pose_to_json(f.T_colour_depth);
+    }
     if (!f.moving.empty()) {  // what the final sweep leaves out of this frame
       j.back()["moving"] = {{"width", f.moving.width}, {"height", f.moving.height}, {"factor", f.moving.factor},
                             {"runs", f.moving.runs}};
@@ -136,7 +139,8 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
     frames.push_back({keyframe.is_null() ? SlamSystem::kNoKeyframe : keyframe.get<std::size_t>(),
                       pose_from_json(f.at("T_keyframe_cam")), f.at("tracked").get<bool>(),
                       f.at("is_keyframe").get<bool>(), f.at("held_out").get<bool>(),
-                      f.contains("moving") ? moving_mask_from_json(f.at("moving"), frames.size()) : MovingMask{}});
+                      f.contains("moving") ? moving_mask_from_json(f.at("moving"), frames.size()) : MovingMask{},
+                      f.contains("T_colour_depth") ? pose_from_json(f.at("T_colour_depth")) : Eigen::Isometry3d::Identity()});
   }
   return frames;
 }

@@ -72,6 +72,7 @@ std::optional<ArrivedFrame> RosFrameSource::next(std::chrono::milliseconds timeo
                                        "depth/image (" + m.depth.encoding + ")"),
                    m.arrived, std::nullopt};
   out.frame.timestamp = m.colour.stamp;
+  out.frame.depth_time_offset = m.depth.stamp - m.colour.stamp;  // paired within sync_slop
   return out;
 }
 

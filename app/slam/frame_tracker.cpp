@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "slam/elapsed.h"
 #include "splat/error.h"
@@ -84,6 +85,13 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   return record;
 }
 
+Eigen::Isometry3d FrameTracker::motion_over(double seconds) const {
+  if (last_poses_.size() < 2) return Eigen::Isometry3d::Identity();
+  const double step = last_times_.back() - last_times_.front();
+  if (!(step > 0)) return Eigen::Isometry3d::Identity();
+  return splat::se3_exp(seconds / step * splat::se3_log(last_poses_.front().inverse() * last_poses_.back()));
+}
+
 Eigen::Vector3d FrameTracker::angular_velocity() const {
   if (last_poses_.size() < 2) return Eigen::Vector3d::Zero();
   const double step = last_times_.back() - last_times_.front();
@@ -150,10 +158,37 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
           ? tracking::grow_regions(moving_, frame.width() / moving_factor_, frame.height() / moving_factor_,
                                    config_.moving.prior_grow_px)
           : std::vector<uint8_t>{};
-  last_prepared_ = prepare(frame, prior);
-  const bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
+  // Depth taken apart from its colour image is moved to the colour's instant: first at the
+  // velocity of the last frames, then, the frame placed, at the velocity from the last frame to
+  // this one (at a turn the prediction is late), and the frame aligned again.
+  // Depth that would move by less than a tenth of a pixel is taken as it is (TUM fr3's offsets
+  // of hundredths of a millisecond); translation counts as seen at 1 m.
+  const Eigen::Isometry3d predicted_motion = motion_over(frame.depth_time_offset);
+  const double shift_px = frame.camera.fx * (Eigen::AngleAxisd(predicted_motion.linear()).angle() +
+                                             predicted_motion.translation().norm() / 1.0);
+  const double offset = shift_px > 0.1 ? frame.depth_time_offset : 0.0;
+  std::optional<splat::RgbdFrame> moved;
+  auto depth_moved_by = [&](const Eigen::Isometry3d& T_colour_depth) -> const splat::RgbdFrame& {
+    moved = splat::with_depth_at_colour_time(frame, T_colour_depth);
+    record.T_colour_depth = T_colour_depth;
+    return *moved;
+  };
+  last_prepared_ = prepare(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
+  bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
+  const double step = last_times_.empty() ? 0 : frame.timestamp - last_times_.back();
+  if (tracked && offset != 0 && step > 0) {
+    const Eigen::Isometry3d motion = last_poses_.back().inverse() * record.T_world_cam;
+    last_prepared_ = prepare(depth_moved_by(splat::se3_exp(offset / step * splat::se3_log(motion))), prior);
+    const auto reference = std::find_if(references_.begin(), references_.end(),
+                                        [&](const Reference& r) { return r.keyframe == record.reference; });
+    FrameRecord again = record;
+    if (reference != references_.end() && align(*reference, keyframe_pose(reference->keyframe), record.T_world_cam, again)) {
+      again.retried = record.retried;
+      record = again;
+    }
+  }
   moving_.clear();
-  if (detect && tracked) leave_out_moving(frame, keyframe_pose, !prior.empty(), record);
+  if (detect && tracked) leave_out_moving(moved ? *moved : frame, keyframe_pose, !prior.empty(), record);
 }
 
 void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,

@@ -37,6 +37,9 @@ struct FrameRecord {
   int renders = 0;      // rasterizer forward passes spent on tracking
   double overlap = 1;   // odometry: fraction of the reference's points this frame sees
   double moving_share = 0;  // odometry: share of the frame's pixels found moving (left out)
+  // Odometry: how the frame's depth was moved to its colour's instant (the depth camera's pose
+  // in the colour camera's, at the velocity tracking found); the identity for synchronized depth.
+  Eigen::Isometry3d T_colour_depth = Eigen::Isometry3d::Identity();
   // Odometry: the reference keyframe the pose was measured against, and the information of that
   // measurement (tracking::OdometryResult::information), for the pose graph.
   static constexpr std::size_t kNoReference = static_cast<std::size_t>(-1);
@@ -118,6 +121,9 @@ class FrameTracker {
   };
   // The constant-velocity guess for a frame at `timestamp`.
   Eigen::Isometry3d predict(double timestamp) const;
+  // The camera's motion over `seconds` at the velocity of the last two tracked poses,
+  // T_cam(t)^-1 T_cam(t + seconds); the identity before there are two.
+  Eigen::Isometry3d motion_over(double seconds) const;
   // The camera's angular velocity (rad/s, camera axes) over the last two tracked poses; zero
   // before there are two.
   Eigen::Vector3d angular_velocity() const;

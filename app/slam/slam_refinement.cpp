@@ -72,7 +72,11 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     splat::RgbdFrame loaded = load(i);
     {
       std::lock_guard lock(mutex_);
-      frames_[i].moving.apply(loaded);  // moving objects stay out of the map
+      // Its depth moved as process() moved it, and moving objects left out of the map.
+      if (!frames_[i].T_colour_depth.isApprox(Eigen::Isometry3d::Identity())) {
+        loaded = splat::with_depth_at_colour_time(loaded, frames_[i].T_colour_depth);
+      }
+      frames_[i].moving.apply(loaded);
     }
     splat::RgbdFrame f = mapper_.refinement_frame(loaded);
     const double mib = static_cast<double>((f.rgb.size() + f.depth.size()) * sizeof(float)) / (1 << 20);

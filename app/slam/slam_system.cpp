@@ -206,38 +206,46 @@ double measured_fraction(const splat::RgbdFrame& frame) {
 }
 }  // namespace
 
-FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
+FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
   rethrow_mapping_error();
   apply_tracker_correction();
+  // Depth taken apart from its colour image is moved to the colour's instant where tracking
+  // found the camera's velocity (FrameRecord::T_colour_depth): else at a turn of 2 rad/s,
+  // 15 ms apart, depth and colour disagree by 2 degrees.
+  std::optional<splat::RgbdFrame> synced;
+  auto frame = [&]() -> const splat::RgbdFrame& { return synced ? *synced : input; };
   FrameRecord record;
-  const double measured = tracker_.started() ? 1.0 : held_out ? 0.0 : measured_fraction(frame);
+  const double measured = tracker_.started() ? 1.0 : held_out ? 0.0 : measured_fraction(input);
   if (measured < kMinSeedDepthFraction) {
-    record.timestamp = frame.timestamp;
+    record.timestamp = input.timestamp;
     record.tracked = false;
     record.held_out = held_out;
     record.reason = held_out ? "a held-out frame before the first keyframe"
                              : "waiting for a first frame with depth: " + std::to_string(100 * measured) +
                                    "% of its pixels are measured";
     std::lock_guard lock(mutex_);
-    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false, held_out, {}});
+    frames_.push_back({kNoKeyframe, Eigen::Isometry3d::Identity(), false, false, held_out, {}, {}});
     record.gaussians = 0;
     return record;
   }
   if (!tracker_.started()) {
-    record.timestamp = frame.timestamp;
+    record.timestamp = input.timestamp;
     record.keyframe = true;
-    tracker_.start(frame);
+    tracker_.start(input);
   } else {
     // Threaded, the odometry may track before the first keyframe is mapped, on an empty map.
     const std::shared_ptr<const splat::Gaussians> snapshot = this->map();
     const splat::Gaussians& map = *snapshot;
-    record = tracker_.track(map, frame, [this](std::size_t k) {
+    record = tracker_.track(map, input, [this](std::size_t k) {
       std::lock_guard lock(mutex_);
       return keyframe_world_[k];
     });
+    if (!record.T_colour_depth.isApprox(Eigen::Isometry3d::Identity())) {
+      synced = splat::with_depth_at_colour_time(input, record.T_colour_depth);
+    }
     if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
       // Lost even against the recent keyframes: look for the frame among all of them.
-      if (const std::optional<BackEnd::Placement> found = back_end_.place(frame, [](std::size_t) { return true; })) {
+      if (const std::optional<BackEnd::Placement> found = back_end_.place(frame(), [](std::size_t) { return true; })) {
         {
           std::lock_guard lock(mutex_);
           record.T_world_cam = splat::orthonormalized(keyframe_world_[found->keyframe] * found->T_keyframe_frame);
@@ -252,19 +260,19 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
     // A relocalized frame becomes a keyframe: tracking goes on against it.
     if (!held_out && (record.relocalized || tracker_.wants_keyframe(record))) {
       record.keyframe = true;
-      tracker_.refine_keyframe(map, frame, record);
+      tracker_.refine_keyframe(map, frame(), record);
     }
   }
   // What mapping leaves out of this frame: where moving objects stand.
   const MovingMask moving = record.moving_share > 0 ? MovingMask::arrivals(tracker_.moving_labels(),
-                                                                           frame.width() / tracker_.moving_factor(),
+                                                                           frame().width() / tracker_.moving_factor(),
                                                                            tracker_.moving_factor())
                                                     : MovingMask{};
   std::optional<KeyframeJob> job;
   {
     std::lock_guard lock(mutex_);
     if (record.keyframe) {
-      job = KeyframeJob{frame, record.T_world_cam, keyframe_world_.size(), {}, {}};
+      job = KeyframeJob{frame(), record.T_world_cam, keyframe_world_.size(), {}, {}};
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
@@ -306,7 +314,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& frame, bool held_out) {
   const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
   // Relative to the keyframe as known now (sequential: after mapping moved it).
   frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
-                     record.tracked, record.keyframe, held_out, moving});
+                     record.tracked, record.keyframe, held_out, moving, record.T_colour_depth});
   record.held_out = held_out;
   record.gaussians = map_->size();
   return record;
@@ -343,7 +351,10 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   if (s.tracker.last_poses.empty() != keyframe_frame.empty()) inconsistent("tracking and keyframes disagree");
   auto keyframe = [&](std::size_t number) {
     if (number >= keyframe_frame.size()) inconsistent("keyframe " + std::to_string(number) + " does not exist");
-    return load(keyframe_frame[number]);
+    const std::size_t i = keyframe_frame[number];
+    const splat::RgbdFrame frame = load(i);  // its depth moved as process() moved it
+    const Eigen::Isometry3d& T = s.frames[i].T_colour_depth;
+    return T.isApprox(Eigen::Isometry3d::Identity()) ? frame : splat::with_depth_at_colour_time(frame, T);
   };
   tracker_.restore(s.tracker, keyframe);
   back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe);

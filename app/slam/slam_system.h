@@ -73,7 +73,7 @@ class SlamSystem {
   // either mode) and maps it when it becomes a keyframe. A `held_out` frame (a test view) is
   // tracked for its pose but never maps, seeds, becomes a keyframe or joins the final sweep.
   // Rethrows an error of the mapping thread.
-  FrameRecord process(const splat::RgbdFrame& frame, bool held_out = false);
+  FrameRecord process(const splat::RgbdFrame& input, bool held_out = false);
   // Threaded: returns once no keyframe waits or is being mapped. Rethrows a mapping error.
   void wait_for_mapping();
   // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.
@@ -127,6 +127,8 @@ class SlamSystem {
     bool tracked, is_keyframe;
     bool held_out = false;
     MovingMask moving;  // left out of mapping, and of the final sweep
+    // How the frame's depth was moved to its colour's instant (unsynchronized cameras).
+    Eigen::Isometry3d T_colour_depth = Eigen::Isometry3d::Identity();
   };
   // Everything the system carries from one frame to the next, for checkpoints; the keyframes'
   // images excepted, which restore() loads again.

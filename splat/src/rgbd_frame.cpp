@@ -1,5 +1,6 @@
 #include "splat/rgbd_frame.h"
 
+#include <cmath>
 #include <string>
 
 #include "splat/error.h"
@@ -16,6 +17,7 @@ RgbdFrame downsample(const RgbdFrame& f, int factor) {
   if (factor == 1) return f;
   RgbdFrame out;
   out.timestamp = f.timestamp;
+  out.depth_time_offset = f.depth_time_offset;
   out.camera = f.camera;
   out.camera.width = f.width() / factor;
   out.camera.height = f.height() / factor;
@@ -61,6 +63,38 @@ Camera posed(const Camera& intrinsics, const Eigen::Isometry3d& T_cam_world) {
   Camera c = intrinsics;
   c.T_cam_world = T_cam_world;
   return c;
+}
+
+std::vector<float> reproject_depth(const std::vector<float>& depth, const Camera& c, const Eigen::Isometry3d& T_to_from) {
+  const int w = c.width, h = c.height;
+  if (depth.size() != static_cast<std::size_t>(w) * h) {
+    throw Error("reproject_depth: " + std::to_string(depth.size()) + " depth values for a " + std::to_string(w) + "x" +
+                std::to_string(h) + " camera");
+  }
+  std::vector<float> out(depth.size(), 0.f);
+  const Eigen::Matrix3d R = T_to_from.linear();
+  const Eigen::Vector3d t = T_to_from.translation();
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double z = depth[static_cast<std::size_t>(y) * w + x];
+      if (!(z > 0)) continue;
+      const Eigen::Vector3d p = R * Eigen::Vector3d((x + 0.5 - c.cx) / c.fx * z, (y + 0.5 - c.cy) / c.fy * z, z) + t;
+      if (!(p.z() > 0)) continue;
+      const double u = c.fx * p.x() / p.z() + c.cx, v = c.fy * p.y() / p.z() + c.cy;
+      if (!(u >= 0 && u < w && v >= 0 && v < h)) continue;
+      float& target = out[static_cast<std::size_t>(v) * w + static_cast<std::size_t>(u)];
+      const float moved = static_cast<float>(p.z());
+      if (target == 0.f || moved < target) target = moved;
+    }
+  }
+  return out;
+}
+
+RgbdFrame with_depth_at_colour_time(const RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth) {
+  RgbdFrame out = frame;
+  out.depth = reproject_depth(frame.depth, frame.camera, T_colour_depth);
+  out.depth_time_offset = 0;
+  return out;
 }
 
 }  // namespace splat

@@ -2,6 +2,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "splat/camera.h"
 
 namespace splat {
@@ -10,7 +12,11 @@ namespace splat {
 // [H, W(, 3)], registered to the same pinhole camera. `camera` carries the intrinsics and
 // size; its pose is not used.
 struct RgbdFrame {
-  double timestamp = 0;
+  double timestamp = 0;  // the colour image's
+  // When the depth image was taken, relative to the colour image (seconds): cameras that are not
+  // synchronized (Kinect v1) pair images up to half a frame apart. 0 once the depth has been
+  // moved to the colour's instant (move_depth).
+  double depth_time_offset = 0;
   Camera camera;
   std::vector<float> rgb;    // [H, W, 3]
   std::vector<float> depth;  // [H, W]
@@ -28,6 +34,16 @@ struct RgbdFrame {
 // valid pixels (0 if none), a block ignored if any of its pixels is, labelled as its first pixel, intrinsics scaled (pixel centres stay at +0.5). factor >= 1; sizes
 // round down.
 RgbdFrame downsample(const RgbdFrame& frame, int factor);
+
+// The frame's depth as the camera would have measured it from a pose moved by T_to_from
+// (x_to = T_to_from x_from): every measured pixel's point moved and projected again, the
+// nearest kept where several land on one pixel; pixels none lands on are left unmeasured.
+std::vector<float> reproject_depth(const std::vector<float>& depth, const Camera& intrinsics,
+                                   const Eigen::Isometry3d& T_to_from);
+
+// The frame with its depth moved to the colour image's instant, given the camera's motion
+// over depth_time_offset: T_colour_depth = T_world_colourcam^-1 T_world_depthcam.
+RgbdFrame with_depth_at_colour_time(const RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth);
 
 // The frame's intrinsics with a pose.
 Camera posed(const Camera& intrinsics, const Eigen::Isometry3d& T_cam_world);
