@@ -54,6 +54,9 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
     slam->restore(read.slam, load);
     for (std::size_t i = stop; i < dataset.entries.size(); ++i) slam->process(load(i));
   }
+  std::size_t moved = 0;  // frames whose depth was moved to its colour's instant
+  for (const auto& f : slam->state().frames) moved += !f.T_colour_depth.isApprox(Eigen::Isometry3d::Identity());
+  EXPECT_GT(moved, 3u);
   slam->refine_map(load);
   EXPECT_GT(slam->mapping_totals().covisible_edges, 0u);
   return {slam->trajectory(), *slam->map()};
@@ -63,6 +66,8 @@ TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
   o.frames = 14;
+  o.shake_peak_rate = 1.0;
+  o.depth_lag = 0.012;  // depth moved to the colour's instant: the checkpoint carries how
   const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   const RunResult straight = run(dataset, dataset.entries.size(), {});
   for (std::size_t stop : {1u, 6u, 11u}) {
