@@ -162,7 +162,9 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
   // velocity of the last frames, then, the frame placed, at the velocity from the last frame to
   // this one (at a turn the prediction is late), and the frame aligned again.
   // Depth that would move by less than a tenth of a pixel is taken as it is (TUM fr3's offsets
-  // of hundredths of a millisecond); translation counts as seen at 1 m.
+  // of hundredths of a millisecond), and the second alignment is left to depth that moves by
+  // half a pixel or more (a fraction of which the prediction can miss); translation counts as
+  // seen at 1 m.
   const Eigen::Isometry3d predicted_motion = motion_over(frame.depth_time_offset);
   const double shift_px = frame.camera.fx * (Eigen::AngleAxisd(predicted_motion.linear()).angle() +
                                              predicted_motion.translation().norm() / 1.0);
@@ -176,7 +178,7 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
   last_prepared_ = prepare(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
   bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
   const double step = last_times_.empty() ? 0 : frame.timestamp - last_times_.back();
-  if (tracked && offset != 0 && step > 0) {
+  if (tracked && shift_px >= 0.5 && step > 0) {
     const Eigen::Isometry3d motion = last_poses_.back().inverse() * record.T_world_cam;
     last_prepared_ = prepare(depth_moved_by(splat::se3_exp(offset / step * splat::se3_log(motion))), prior);
     const auto reference = std::find_if(references_.begin(), references_.end(),
