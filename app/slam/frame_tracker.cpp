@@ -64,6 +64,7 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
                                 const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose) {
   FrameRecord record;
   record.timestamp = frame.timestamp;
+  moved_.reset();
   const auto start = std::chrono::steady_clock::now();
   if (config_.front_end == "odometry") {
     track_odometry(frame, keyframe_pose, record);
@@ -169,11 +170,10 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
   const double shift_px = frame.camera.fx * (Eigen::AngleAxisd(predicted_motion.linear()).angle() +
                                              predicted_motion.translation().norm() / 1.0);
   const double offset = shift_px > 0.1 ? frame.depth_time_offset : 0.0;
-  std::optional<splat::RgbdFrame> moved;
   auto depth_moved_by = [&](const Eigen::Isometry3d& T_colour_depth) -> const splat::RgbdFrame& {
-    moved = splat::with_depth_at_colour_time(frame, T_colour_depth);
+    moved_ = splat::with_depth_at_colour_time(frame, T_colour_depth);
     record.T_colour_depth = T_colour_depth;
-    return *moved;
+    return *moved_;
   };
   last_prepared_ = prepare(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
   bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
@@ -190,7 +190,7 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
     }
   }
   moving_.clear();
-  if (detect && tracked) leave_out_moving(moved ? *moved : frame, keyframe_pose, !prior.empty(), record);
+  if (detect && tracked) leave_out_moving(moved_ ? *moved_ : frame, keyframe_pose, !prior.empty(), record);
 }
 
 void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,

@@ -8,6 +8,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,9 @@ class FrameTracker {
   // The last tracked frame's moving regions (tracking::MovingLabel per pixel of
   // tracking::moving_level(), moving_factor() times smaller than the frame), or empty: none found.
   const std::vector<uint8_t>& moving_labels() const { return moving_; }
+  // The last tracked frame with its depth moved to its colour's instant (odometry), or null
+  // where its depth was taken as it is (FrameRecord::T_colour_depth the identity).
+  const splat::RgbdFrame* depth_moved_frame() const { return moved_ ? &*moved_ : nullptr; }
   int moving_factor() const { return moving_factor_; }
   // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
   void relocalized(const FrameRecord& record);
@@ -159,6 +163,7 @@ class FrameTracker {
   std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
   std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
+  std::optional<splat::RgbdFrame> moved_;  // depth_moved_frame()
   int moving_factor_ = 1;
 };
 

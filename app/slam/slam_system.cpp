@@ -212,7 +212,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
   // Depth taken apart from its colour image is moved to the colour's instant where tracking
   // found the camera's velocity (FrameRecord::T_colour_depth): else at a turn of 2 rad/s,
   // 15 ms apart, depth and colour disagree by 2 degrees.
-  std::optional<splat::RgbdFrame> synced;
+  const splat::RgbdFrame* synced = nullptr;
   auto frame = [&]() -> const splat::RgbdFrame& { return synced ? *synced : input; };
   FrameRecord record;
   const double measured = tracker_.started() ? 1.0 : held_out ? 0.0 : measured_fraction(input);
@@ -240,9 +240,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
       std::lock_guard lock(mutex_);
       return keyframe_world_[k];
     });
-    if (!record.T_colour_depth.isApprox(Eigen::Isometry3d::Identity())) {
-      synced = splat::with_depth_at_colour_time(input, record.T_colour_depth);
-    }
+    synced = tracker_.depth_moved_frame();
     if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
       // Lost even against the recent keyframes: look for the frame among all of them.
       if (const std::optional<BackEnd::Placement> found = back_end_.place(frame(), [](std::size_t) { return true; })) {
