@@ -1,5 +1,6 @@
 #include "splat/gaussians.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -84,16 +85,22 @@ void validate_sizes(const GaussiansViewT<Scalar>& g, std::string_view where) {
 }
 
 template <typename Scalar>
-void validate(const GaussiansViewT<Scalar>& g, std::string_view where) {
+void validate(const GaussiansViewT<Scalar>& g, std::string_view where, ThreadPool* pool) {
   validate_sizes(g, where);
   for (ParamGroup group : kAllParamGroups) {
     const auto values = group_field(g, group);
     const std::size_t width = static_cast<std::size_t>(param_group_width(group, g.sh_degree));
     // First a check that vectorizes (x - x is 0 unless x is infinite or NaN), then the search.
-    int finite = 1;
+    constexpr std::size_t kChunk = 1 << 16;
+    std::vector<int> chunk_finite((values.size() + kChunk - 1) / kChunk, 1);
+    parallel_for(pool, chunk_finite.size(), [&](std::size_t c) {
+      int finite = 1;
+      const std::size_t end = std::min(values.size(), (c + 1) * kChunk);
 #pragma omp simd reduction(& : finite)
-    for (std::size_t i = 0; i < values.size(); ++i) finite &= (values[i] - values[i] == 0);
-    if (finite) continue;
+      for (std::size_t i = c * kChunk; i < end; ++i) finite &= (values[i] - values[i] == 0);
+      chunk_finite[c] = finite;
+    });
+    if (std::all_of(chunk_finite.begin(), chunk_finite.end(), [](int f) { return f != 0; })) continue;
     for (std::size_t i = 0; i < values.size(); ++i) {
       if (!std::isfinite(values[i])) {
         throw Error(std::string(where) + ": " + param_group_name(group) + " of Gaussian " +
@@ -109,7 +116,7 @@ void validate(const GaussiansViewT<Scalar>& g, std::string_view where) {
   template std::vector<Scalar>& param_group(GaussiansT<Scalar>&, ParamGroup);               \
   template const std::vector<Scalar>& param_group(const GaussiansT<Scalar>&, ParamGroup);   \
   template void validate_sizes(const GaussiansViewT<Scalar>&, std::string_view);           \
-  template void validate(const GaussiansViewT<Scalar>&, std::string_view);
+  template void validate(const GaussiansViewT<Scalar>&, std::string_view, ThreadPool*);
 GSLAM_INSTANTIATE(float)
 GSLAM_INSTANTIATE(double)
 #undef GSLAM_INSTANTIATE

@@ -4,6 +4,8 @@
 #include <string_view>
 #include <vector>
 
+#include "splat/thread_pool.h"
+
 namespace splat {
 
 // Number of spherical-harmonics coefficients per colour channel for a degree in 0..3.
@@ -71,8 +73,9 @@ using GaussiansView = GaussiansViewT<float>;
 template <typename Scalar>
 void validate_sizes(const GaussiansViewT<Scalar>& g, std::string_view where);
 
-// validate_sizes, then checks every value is finite. Throws naming the field and the Gaussian.
+// validate_sizes, then checks every value is finite (on `pool` where given: a map is checked on every
+// render). Throws naming the field and the Gaussian.
 template <typename Scalar>
-void validate(const GaussiansViewT<Scalar>& g, std::string_view where);
+void validate(const GaussiansViewT<Scalar>& g, std::string_view where, ThreadPool* pool = nullptr);
 
 }  // namespace splat

@@ -31,7 +31,7 @@ template <typename Scalar>
 ForwardResultT<Scalar> reference_forward(const GaussiansViewT<Scalar>& gaussians,
                                          const Camera& camera, const RenderSettings& settings,
                                          ThreadPool& pool, StageTimes* times) {
-  validate(gaussians, "rasterize");
+  validate(gaussians, "rasterize", &pool);
   camera.validate("rasterize");
   ForwardResultT<Scalar> frame;
   frame.gaussians = gaussians;
