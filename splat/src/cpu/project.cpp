@@ -137,9 +137,10 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
   const CameraModel<T> cam(frame.camera);
   const int degree = effective_degree(g.sh_degree, frame.settings);
   const int stride_k = sh_coeff_count(g.sh_degree);
-  GaussianGradsT<T>& d = out.d_gaussians;
+  // Fresh, so zero: culled Gaussians and clamped colours are never written below.
+  GaussianGradsT<T>& d = out.d_gaussians = GaussianGradsT<T>{};
   d.sh_degree = g.sh_degree;
-  d.resize(n);  // zeroed per chunk below, on the pool's threads
+  d.resize(n);
 
   // Pose gradient, summed per fixed-size chunk and then in chunk order: the result does not
   // depend on the thread count. dL/dW (3x3) and dL/dt (3) of p_cam = W p + t.
@@ -150,16 +151,11 @@ void project_backward(const ForwardResultT<T>& frame, const ScreenGrads<T>& scre
 
   pool.parallel_for(chunks, [&](std::size_t chunk) {
     const std::size_t begin = chunk * kChunk, end = std::min(n, (chunk + 1) * kChunk);
-    for (ParamGroup group : kAllParamGroups) {
-      std::vector<T>& v = param_group(d, group);
-      const std::size_t per = v.size() / std::max<std::size_t>(n, 1);
-      std::fill(v.begin() + static_cast<std::ptrdiff_t>(begin * per), v.begin() + static_cast<std::ptrdiff_t>(end * per), T(0));
-    }
     Mat3<T> v_w(0);
     Vec3<T> v_t(0);
     for (std::size_t i = begin; i < end; ++i) {
       // Off screen (no tile reached): every screen gradient is zero, and so is every gradient
-      // below; its zeros are written above.
+      // below.
       if (frame.radii[i * 2] <= 0 && frame.radii[i * 2 + 1] <= 0) continue;
       const Vec3<T> p_world = load3(g.means, i);
       const Vec3<T> p = transform_point(cam.rotation, cam.translation, p_world);
