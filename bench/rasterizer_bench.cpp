@@ -1,6 +1,7 @@
 // Forward, forward+backward and forward+pose Jacobian (what Gauss-Newton tracking calls) on
 // the donut workload (bench/donut_workload.h), on every backend that can run here (cpu; vulkan
-// when a device exists), in one table.
+// when a device exists, and vulkan_portable, its deterministic backward, where the device has
+// float atomics), in one table.
 // Run: build/bench/rasterizer_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
@@ -34,7 +35,11 @@ std::map<std::string, std::unique_ptr<splat::Rasterizer>> backends;
 
 splat::Rasterizer* backend(const std::string& name) {
   auto& r = backends[name];
-  if (!r) r = name == "cpu" ? splat::make_cpu_rasterizer() : splat::make_vulkan_rasterizer();
+  if (!r) {
+    splat::VulkanOptions options;
+    options.float_atomics = name != "vulkan_portable";
+    r = name == "cpu" ? splat::make_cpu_rasterizer() : splat::make_vulkan_rasterizer(options);
+  }
   return r.get();
 }
 
@@ -172,8 +177,9 @@ void mapping_sizes(benchmark::internal::Benchmark* b) {
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   std::vector<std::string> backends{"cpu"};
+  bool float_atomics = false;
   try {
-    backend("vulkan");
+    float_atomics = backend("vulkan")->name().find("float atomics") != std::string::npos;
     backends.push_back("vulkan");
   } catch (const splat::Error& e) {
     std::fprintf(stderr, "vulkan backend not benchmarked: %s\n", e.what());
@@ -187,6 +193,11 @@ int main(int argc, char** argv) {
     if (name != "cpu") {
       benchmark::RegisterBenchmark(("MappingResident/" + name).c_str(), mapping_step, name, true)->Apply(mapping_sizes);
     }
+  }
+  if (float_atomics) {  // the backward's other reduction, deterministic: what it costs here
+    benchmark::RegisterBenchmark("ForwardBackward/vulkan_portable", run, "vulkan_portable", Then::kBackward)->Apply(sizes);
+    benchmark::RegisterBenchmark("MappingResident/vulkan_portable", mapping_step, "vulkan_portable", true)
+        ->Apply(mapping_sizes);
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

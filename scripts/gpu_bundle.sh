@@ -6,8 +6,9 @@
 # Usage: scripts/gpu_bundle.sh [N|bench|app N]
 # `bench` packs only the rasterizer's tests and benchmarks and the donut map (7 MiB): the full
 # bundle's libraries (OpenCV, FFmpeg, ROS) now pass the device tool's 64 MiB.
-# `app N` packs gslam itself for reconstruct and live on teddy's first N frames: its libraries
-# xz-compressed into app.tar.xz, less OpenCV's video and image codecs, whose closures (FFmpeg,
+# `app N` packs gslam for reconstruct and live on teddy's first N frames, with rasterizer_bench,
+# splat_tests and the donut map for the mapping iteration's bench and the Vulkan tests: their
+# libraries xz-compressed into app.tar.xz, less OpenCV's video and image codecs, whose closures (FFmpeg,
 # GDAL, ...) are most of the 350 MiB. Stubs stand in for them (render's video export and ROS's
 # compressed images call them; reconstruct and live do not: a call aborts naming the stub).
 set -euo pipefail
@@ -23,7 +24,7 @@ rm -rf "$bundle" && mkdir -p "$bundle/bin" "$bundle/lib" "$bundle/data"
 if [ "$frames" = bench ]; then
   cp build/bench/{rasterizer_bench,mapping_host_bench} build/tests/splat_tests "$bundle/bin/"
 elif $app_mode; then
-  cp build/app/gslam "$bundle/bin/"
+  cp build/app/gslam build/bench/rasterizer_bench build/tests/splat_tests "$bundle/bin/"
   # The stubs: every symbol gslam takes from the two libraries, each aborting with its name.
   stubs=$(mktemp -d)
   for lib in libopencv_videoio.so.406 libopencv_imgcodecs.so.406; do
@@ -52,6 +53,8 @@ if [ "$frames" = bench ]; then
 fi
 if $app_mode; then
   tar -C "$bundle" -cJf "$bundle/app.tar.xz" bin lib && rm -rf "$bundle/bin" "$bundle/lib"
+  mkdir -p "$bundle/data/v3dg_donut_3dgs_ply"  # the benchmark's map
+  cp "$shared"/v3dg_donut_3dgs_ply/{fused.ply,SOURCE.md} "$bundle/data/v3dg_donut_3dgs_ply/"
 else
   cp -r "$shared"/{INDEX.md,gsplat_reference_render_brush,khr_gaussian_splatting_fixtures_bevy,supersplat_fruit_drops_3dgs_ply,v3dg_donut_3dgs_ply} "$bundle/data/"
 fi

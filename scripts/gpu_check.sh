@@ -2,8 +2,9 @@
 # Runs the Vulkan checks on a GPU machine, from the repository root, on the bundle that
 # scripts/gpu_bundle.sh made: STEP = tests (the Vulkan tests), bench (rasterizer_bench),
 # teddy (reconstruct + eval on the teddy prefix), render (donut orbit, Vulkan and CPU), live
-# (replayed at 1x and 0.25x), all (the first four), or app (on `gpu_bundle.sh app N`: reconstruct
-# with the resident map and with the host loop, then live at 1x). Results go to $OUT (default
+# (replayed at 1x and 0.25x), all (the first four), or app (on `gpu_bundle.sh app N`: the Vulkan
+# tests of splat_tests, the mapping iteration's bench, reconstruct with the resident map and,
+# unless HOST_LOOP=0, with the host loop, then live at 1x). Results go to $OUT (default
 # /tmp/gpu_out).
 # The binaries carry their build's absolute paths (/work/main, ../shared/data): links stand in.
 # Expects the Vulkan loader and glvnd unpacked from .gl/*.deb when present (a bare NVIDIA image).
@@ -44,8 +45,11 @@ if [ "$STEP" = live ]; then
   done
 fi
 if [ "$STEP" = app ]; then
+  timeout 240 "$B/bin/splat_tests" --gtest_brief=1 --gtest_filter='*Vulkan*:*vulkan*:*Resident*' > "$OUT/splat_tests.log" 2>&1; echo "splat_tests rc=$?"; tail -2 "$OUT/splat_tests.log"
+  [ -x "$B/bin/rasterizer_bench" ] && timeout 120 "$B/bin/rasterizer_bench" --benchmark_filter='MappingResident|ForwardBackward/vulkan/100000/640' 2>&1 | tee "$OUT/bench.txt"
   echo '{"mapping": {"device_resident": false}}' > /tmp/host_loop.json
-  for run in resident host_loop; do
+  runs=(resident); [ "${HOST_LOOP:-1}" = 1 ] && runs+=(host_loop)
+  for run in "${runs[@]}"; do
     config=(); [ $run = host_loop ] && config=(--config /tmp/host_loop.json)
     timeout 240 build/app/gslam reconstruct "$T" --backend vulkan "${config[@]}" --out /tmp/rec_$run > "$OUT/rec_$run.log" 2>&1; echo "reconstruct $run rc=$?"; tail -2 "$OUT/rec_$run.log"
     cp /tmp/rec_$run/summary.json "$OUT/rec_${run}_summary.json"

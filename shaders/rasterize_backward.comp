@@ -3,9 +3,9 @@
 // tile's splats back to front from the last one any pixel used, a batch at a time in shared
 // memory. Each splat's gradients are summed over the tile's pixels into its intersection's
 // kGradSlots slots (every intersection belongs to one tile), in one of two ways:
-// - GSLAM_FLOAT_ATOMICS (VK_EXT_shader_atomic_float): subgroupAdd, then one float atomicAdd
-//   per subgroup; batches of kGroupSize splats. Subgroups add in varying order, so the last
-//   bits vary from run to run.
+// - GSLAM_FLOAT_ATOMICS (VK_EXT_shader_atomic_float): subgroupAdd, then float atomicAdds, one
+//   per slot and subgroup; batches of kGroupSize splats. Subgroups add in varying order, so the
+//   last bits vary from run to run.
 // - portable: subgroupAdd, the partials kept in shared memory and summed in subgroup order after
 //   each batch of kBackwardBatch splats; deterministic, more barriers.
 // Reads bindings 0..12; writes 13 (zeroed by the host first, so intersections behind every
@@ -37,6 +37,15 @@ shared float partials[kBatch][kGradSlots][kMaxSubgroups];
 #endif
 shared Splat batch[kBatch];
 shared uint tile_last;
+
+// A subgroup's sum of one gradient slot of splat s (batch entry k).
+void store_sum(uint s, int k, uint slot, float sum) {
+#ifdef GSLAM_FLOAT_ATOMICS
+  atomicAdd(isect_grads[s * kGradSlots + slot], sum);
+#else
+  partials[k][slot][gl_SubgroupID] = sum;
+#endif
+}
 
 void main() {
   uint tid = gl_LocalInvocationIndex;
@@ -77,7 +86,19 @@ void main() {
       uint s = lo + uint(k);
       Splat sp = batch[k];
       PixelEval e = eval_pixel(sp, centre);
-      float live = (s < last && e.alpha >= kAlphaMin) ? 1.0 : 0.0;
+      bool used = s < last && e.alpha >= kAlphaMin;
+      // A splat none of the subgroup's pixels use leaves their state as it is (its weight and
+      // gradients are zero): skip its arithmetic and reductions. Most splats touch few of a
+      // subgroup's pixels.
+      if (!subgroupAny(used)) {
+#ifndef GSLAM_FLOAT_ATOMICS
+        if (subgroupElect()) {
+          for (uint slot = 0u; slot < kGradSlots; ++slot) partials[k][slot][gl_SubgroupID] = 0;
+        }
+#endif
+        continue;
+      }
+      float live = used ? 1.0 : 0.0;
       float inv = live / (1.0 - e.alpha);
       float t_front = live > 0 ? t * inv : t;  // transmittance in front of this splat
       float weight = live * e.alpha * t_front;
@@ -101,26 +122,24 @@ void main() {
       g[kSlotGreen] = weight * v_rgb.g;
       g[kSlotBlue] = weight * v_rgb.b;
       g[kSlotDepth] = weight * v_z;
-      // Most splats touch few of a subgroup's pixels: skip the reductions when none.
-      bool any_live = subgroupAny(live > 0);
-#ifdef GSLAM_FLOAT_ATOMICS
-      if (any_live) {
-        for (uint slot = 0u; slot < kGradSlots; ++slot) {
-          float sum = subgroupAdd(g[slot]);
-          if (subgroupElect()) atomicAdd(isect_grads[s * kGradSlots + slot], sum);
+      // Each slot's sum over the subgroup, stored (added into the intersection's slot, or kept
+      // as this subgroup's partial) by lane `slot`: one store of kGradSlots lanes rather than
+      // kGradSlots stores of one. Subgroups narrower than kGradSlots store one sum at a time.
+      bool lane_per_slot = gl_SubgroupSize >= kGradSlots;
+      float mine = 0;
+      for (uint slot = 0u; slot < kGradSlots; ++slot) {
+        float sum = subgroupAdd(g[slot]);
+        if (lane_per_slot) {
+          if (gl_SubgroupInvocationID == slot) mine = sum;
+        } else if (subgroupElect()) {
+          store_sum(s, k, slot, sum);
         }
       }
-    }
-#else
-      if (any_live) {
-        for (uint slot = 0u; slot < kGradSlots; ++slot) {
-          float sum = subgroupAdd(g[slot]);
-          if (subgroupElect()) partials[k][slot][gl_SubgroupID] = sum;
-        }
-      } else if (subgroupElect()) {
-        for (uint slot = 0u; slot < kGradSlots; ++slot) partials[k][slot][gl_SubgroupID] = 0;
+      if (lane_per_slot && gl_SubgroupInvocationID < kGradSlots) {
+        store_sum(s, k, gl_SubgroupInvocationID, mine);
       }
     }
+#ifndef GSLAM_FLOAT_ATOMICS
     barrier();
     // Sum the subgroup partials of every (splat, slot) in subgroup order.
     for (uint item = tid; item < count * kGradSlots; item += kGroupSize) {

@@ -119,7 +119,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
     const std::shared_ptr<const splat::Gaussians> map = live->map();
     if (!map) return;  // no frame yet
     outputs->update_poses(live->trajectory());
-    outputs->set_mapping(live->mapping_totals(), live->loop_events(), live->mapping_on_device());
+    outputs->set_mapping(live->mapping_totals(), live->loop_events(), live->mapping_on_device(), false);
     outputs->checkpoint(*map, live->keyframes(), true);
   };
   // A host's request between frames: the run folder written now, or the map forgotten.
@@ -305,7 +305,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
 
   const MappingTotals mapping = live->mapping_totals();
   outputs->update_poses(live->trajectory());
-  outputs->set_mapping(mapping, live->loop_events(), live->mapping_on_device());
+  outputs->set_mapping(mapping, live->loop_events(), live->mapping_on_device(), false);
   if (host) {  // a host's camera, or a watched folder's, is known once frames came
     outputs->extra()["input"] = host->input_json(source->intrinsics(), config);
   } else if (input.is_null()) {

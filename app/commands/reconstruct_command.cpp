@@ -14,6 +14,7 @@
 #include "io/run_folder.h"
 #include "io/slam_config_io.h"
 #include "slam/slam_system.h"
+#include "datasets/frame_prefetch.h"
 #include "datasets/synthetic_sequence.h"
 #include "splat/error.h"
 
@@ -115,9 +116,10 @@ int run_reconstruct(const ReconstructOptions& o) {
   progress.resume_at(first);
   const std::size_t every = static_cast<std::size_t>(std::max(1, o.checkpoint_every));
   std::size_t loops_reported = slam.loop_events().size();
+  FramePrefetch prefetch(load, first, dataset.entries.size());
   for (std::size_t i = first; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
-    const auto load_start = std::chrono::steady_clock::now();
-    const splat::RgbdFrame frame = dataset.load(i);
+    const auto load_start = std::chrono::steady_clock::now();  // loading: the time spent waiting for it
+    const splat::RgbdFrame frame = prefetch.take(i);
     const double loading_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
     const FrameRecord record = slam.process(frame, is_held_out(i, plan.test_every));
@@ -160,7 +162,7 @@ int run_reconstruct(const ReconstructOptions& o) {
                  refined.visits, refined.frames, refine_progress.elapsed_seconds(), refined.pruned, refined.ghosts, refined.blurred);
   }
   outputs.update_poses(slam.trajectory());  // keyframes moved by mapping carry their frames
-  outputs.set_mapping(slam.mapping_totals(), slam.loop_events(), slam.mapping_on_device());
+  outputs.set_mapping(slam.mapping_totals(), slam.loop_events(), slam.mapping_on_device(), slam.mapping_overlapped());
   if (!InterruptGuard::interrupted()) {  // the map's classes, from the label images if there are any
     fuse_run_labels(dataset, slam.trajectory(), *slam.map(), *rasterizer, config.mapping.refine_resolution_factor, outputs);
   }

@@ -127,7 +127,8 @@ std::string describe(const LoopEvent& loop) {
   return text;
 }
 
-void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent>& loops, bool on_device) {
+void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent>& loops, bool on_device,
+                             bool overlapped) {
   nlohmann::json events = nlohmann::json::array();
   std::size_t accepted = 0;
   for (const LoopEvent& e : loops) {
@@ -141,7 +142,8 @@ void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent
                        {"gaussians_added", t.gaussians_added},     {"gaussians_pruned", t.gaussians_pruned},
                        {"ghosts_pruned", t.ghosts_pruned},
                        {"iterations", t.iterations},               {"last_loss", t.last_loss},
-                       {"seconds", t.mapping_ms / 1000},           {"on_device", on_device}};
+                       {"seconds", t.mapping_ms / 1000},           {"on_device", on_device},
+                       {"overlapped", overlapped}};
 }
 
 nlohmann::json RunOutputs::summary(const splat::Gaussians& map, std::size_t keyframes, bool complete,

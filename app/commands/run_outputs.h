@@ -40,7 +40,7 @@ class RunOutputs {
   // Replaces the recorded poses (one per frame added, in order) with later estimates.
   void update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam);
   // What mapping did (summary.json "mapping") and every loop it verified ("loops").
-  void set_mapping(const MappingTotals& totals, const std::vector<LoopEvent>& loops, bool on_device);
+  void set_mapping(const MappingTotals& totals, const std::vector<LoopEvent>& loops, bool on_device, bool overlapped);
   // Extra summary fields (live mode: dropped frames, latency percentiles).
   nlohmann::json& extra() { return extra_; }
   // The run stopped before its input ended and can continue (reconstruct --resume): finish()

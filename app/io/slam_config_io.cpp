@@ -43,6 +43,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"", "refine_cache_mib", &c.refine_cache_mib},
       {"", "relocalize_iterations", &c.relocalize_iterations},
       {"", "mapping_backlog_mib", &c.mapping_backlog_mib},
+      {"", "overlap_mapping", &c.overlap_mapping},
       {"loop_closure", "enabled", &c.loop_closure.enabled},
       {"loop_closure", "min_separation", &c.loop_closure.min_separation},
       {"loop_closure", "dense_width", &c.loop_closure.dense_width},

@@ -96,6 +96,14 @@ struct SlamConfig {
   // many MiB (a 640x480 keyframe takes 4.7 MiB), for SlamSystem::catch_up_mapping() at the end of
   // the stream; beyond it the oldest are dropped for good.
   double mapping_backlog_mib = 512;
+  // Sequential runs (reconstruct) mapping on the backend's device (the resident map): a
+  // keyframe's optimization runs on a thread of its own while the next frames are tracked, and
+  // what depends on it (loop closure, covisibility, the map and keyframe poses tracking sees) is
+  // applied when the next keyframe comes, so a run still gives the same result every time. Only
+  // where tracking never renders (the odometry front end, keyframe_render_iterations 0). The CPU
+  // backend maps in turn with tracking: its mapping takes every core, and overlapping it was no
+  // faster (docs/vulkan.md). false: in turn everywhere.
+  bool overlap_mapping = true;
   LoopClosureConfig loop_closure;
 
   struct SweepVisits {

@@ -23,7 +23,9 @@ SlamSystem::SlamSystem(splat::Rasterizer& rasterizer, const SlamConfig& config)
       tracker_(rasterizer, config_),
       mapper_(rasterizer, config_.mapping),
       back_end_(config_),
-      threaded_(false) {}
+      threaded_(false),
+      overlapped_(config_.overlap_mapping && mapper_.device_resident() && config_.front_end == "odometry" &&
+                  config_.keyframe_render_iterations == 0) {}
 
 SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer& mapping_rasterizer,
                        const SlamConfig& config)
@@ -32,13 +34,15 @@ SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer
       tracker_(tracking_rasterizer, config_),
       mapper_(mapping_rasterizer, config_.mapping),
       back_end_(config_),
-      threaded_(true) {
+      threaded_(true),
+      overlapped_(false) {
   if (&tracking_rasterizer == &mapping_rasterizer) {
     throw splat::Error("SlamSystem: threaded mapping needs a rasterizer of its own, got the tracking one");
   }
 }
 
 SlamSystem::~SlamSystem() {
+  if (in_flight_) in_flight_->optimized.wait();  // its error, if any, goes unreported
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
@@ -174,13 +178,22 @@ void SlamSystem::rethrow_mapping_error() {
 
 double SlamSystem::map_keyframe(const KeyframeJob& job) {
   const auto start = std::chrono::steady_clock::now();
+  const mapping::MappingStats stats = optimize_keyframe(job);
+  return publish_keyframe(job, stats, ms_since(start));
+}
+
+mapping::MappingStats SlamSystem::optimize_keyframe(const KeyframeJob& job) {
   mapper_keyframes_.push_back(job.keyframe);  // the mapper numbers keyframes in the order added
-  const mapping::MappingStats stats = mapper_.add_keyframe(job.frame, job.T_world_cam.inverse());
+  return mapper_.add_keyframe(job.frame, job.T_world_cam.inverse());
+}
+
+double SlamSystem::publish_keyframe(const KeyframeJob& job, const mapping::MappingStats& stats, double optimize_ms) {
+  const auto start = std::chrono::steady_clock::now();
   if (config_.loop_closure.enabled && config_.front_end == "odometry") close_loops(job);
   if (config_.front_end == "odometry") link_covisible(job);
   auto snapshot = std::make_shared<const splat::Gaussians>(mapper_.map());
   const auto poses = mapper_.keyframe_poses();
-  const double ms = ms_since(start);
+  const double ms = optimize_ms + ms_since(start);
   std::lock_guard lock(mutex_);
   for (const auto& [number, T_cam_world] : poses) keyframe_world_[mapper_keyframes_[number]] = T_cam_world.inverse();
   map_ = std::move(snapshot);
@@ -192,6 +205,25 @@ double SlamSystem::map_keyframe(const KeyframeJob& job) {
   totals_.last_loss = stats.final_loss;
   totals_.mapping_ms += ms;
   return ms;
+}
+
+void SlamSystem::start_overlapped(KeyframeJob job) {
+  in_flight_ = std::make_unique<InFlight>(InFlight{std::move(job), {}});
+  in_flight_->optimized = std::async(std::launch::async, [this, &job = in_flight_->job] {
+    const auto start = std::chrono::steady_clock::now();
+    mapping::MappingStats stats = optimize_keyframe(job);
+    return std::make_pair(stats, ms_since(start));
+  });
+}
+
+double SlamSystem::finish_overlapped() {
+  if (!in_flight_) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  const std::unique_ptr<InFlight> done = std::move(in_flight_);
+  const auto [stats, optimize_ms] = done->optimized.get();
+  publish_keyframe(done->job, stats, optimize_ms);
+  apply_tracker_correction();  // a loop it closed moves the motion model now
+  return ms_since(start);
 }
 
 namespace {
@@ -289,7 +321,16 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
   // The render front end tracks against the map: the first keyframe seeds it before anything
   // is tracked. The odometry needs no map, so threaded it maps even the first in the background.
   const bool map_now = !threaded_ || (job && job->keyframe == 0 && config_.front_end == "render");
-  if (job && map_now) {
+  if (job && overlapped_) {
+    // The keyframe before is published first (its loops move this one along), then this one
+    // is optimized while the next frames are tracked.
+    record.mapping_ms = finish_overlapped();
+    {
+      std::lock_guard lock(mutex_);
+      job->T_world_cam = keyframe_world_[job->keyframe];
+    }
+    start_overlapped(std::move(*job));
+  } else if (job && map_now) {
     record.mapping_ms = map_keyframe(*job);
     apply_tracker_correction();  // a loop it closed moves the motion model now
   } else if (job) {
@@ -401,6 +442,7 @@ void SlamSystem::mapping_loop() {
 }
 
 void SlamSystem::wait_for_mapping() {
+  finish_overlapped();
   {
     std::unique_lock lock(mutex_);
     idle_.wait(lock, [&] { return (!pending_ && !busy_) || !thread_.joinable(); });

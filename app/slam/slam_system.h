@@ -2,7 +2,11 @@
 // the last frame an offline run may sweep the map over every tracked frame. One object serves
 // both ways of running it:
 // - sequential (`gslam reconstruct`): each keyframe is mapped inside process(), before the next
-//   frame is tracked, so a run is deterministic;
+//   frame is tracked, so a run is deterministic. With SlamConfig::overlap_mapping (mapping on
+//   the device, tracking never rendering) a keyframe's optimization runs on a thread of its own
+//   while the next frames are tracked, and the rest of its mapping (loops, covisibility,
+//   publishing) runs when the next keyframe comes, on the caller's thread: still the same result
+//   every run;
 // - threaded (`gslam live`): mapping runs on a thread of its own with its own rasterizer.
 //   Keyframes wait in a one-slot queue; a newer keyframe replaces a waiting one (counted as
 //   skipped), so tracking never waits for mapping. Skipped keyframes are kept in a backlog
@@ -15,6 +19,7 @@
 #include <condition_variable>
 #include <deque>
 #include <functional>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -94,6 +99,8 @@ class SlamSystem {
   MappingTotals mapping_totals() const;
   // Whether the map is optimized on the backend's device (Mapper::device_resident).
   bool mapping_on_device() const { return mapper_.device_resident(); }
+  // Whether keyframes are optimized while the next frames are tracked (SlamConfig::overlap_mapping).
+  bool mapping_overlapped() const { return overlapped_; }
   std::vector<LoopEvent> loop_events() const;
   // The camera's vignetting as the final refinement estimated it (none before).
   mapping::Vignetting vignetting() const;
@@ -167,6 +174,16 @@ class SlamSystem {
   };
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
+  // The two halves of map_keyframe: the mapper's optimization (the mapping thread's, or the
+  // overlapped one's), then loops, covisibility and publishing, which add their time to
+  // `optimize_ms` and return the sum.
+  mapping::MappingStats optimize_keyframe(const KeyframeJob& job);
+  double publish_keyframe(const KeyframeJob& job, const mapping::MappingStats& stats, double optimize_ms);
+  // Overlapped: optimizes `job` on a thread of its own; finish_overlapped() waits for the one in
+  // flight (rethrowing its error), publishes it and moves tracking with the loops it closed, and
+  // returns the time that took (0 when none was in flight).
+  void start_overlapped(KeyframeJob job);
+  double finish_overlapped();
   // Loop closure for a keyframe just mapped (the mapping thread's), then covisibility: the back
   // end's solutions applied to the keyframes, the map and tracking.
   void close_loops(const KeyframeJob& job);
@@ -189,6 +206,12 @@ class SlamSystem {
   mapping::Mapper mapper_;  // the mapping thread's alone while it runs
   BackEnd back_end_;
   const bool threaded_;
+  const bool overlapped_;  // sequential, with SlamConfig::overlap_mapping where it applies
+  struct InFlight {
+    KeyframeJob job;
+    std::future<std::pair<mapping::MappingStats, double>> optimized;  // and its time in ms
+  };
+  std::unique_ptr<InFlight> in_flight_;  // overlapped: the keyframe being optimized
   std::vector<std::size_t> mapper_keyframes_;  // the system's keyframe number per mapper number
 
   mutable std::mutex mutex_;  // guards everything below

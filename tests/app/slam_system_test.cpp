@@ -367,6 +367,53 @@ TEST(SlamSystem, ThreadedMappingThatKeepsUpGivesTheSequentialTrajectory) {
   EXPECT_EQ(threaded.map()->opacity_logits, sequential.map()->opacity_logits);
 }
 
+// A sequential run mapping on the device optimizes each keyframe while the next frames are
+// tracked, and gives what mapping in turn gives: the same keyframes and map size, the trajectory
+// to a micrometre (the keyframes' poses come back from the mapper a few frames later), and the
+// same result bit for bit on a second run (the portable reduction repeats itself).
+TEST(SlamSystem, OverlappedDeviceMappingGivesTheInTurnResultEveryRun) {
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan_portable");
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 12;
+  o.width = 160, o.height = 120, o.focal = 130;
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  app::SlamConfig config;
+  config.mapping.iterations = 5;
+  struct Run {
+    std::vector<app::FrameRecord> records;
+    std::vector<Eigen::Isometry3d> trajectory;
+    splat::Gaussians map;
+    bool overlapped = false;
+  };
+  auto run = [&](bool overlap) {
+    config.overlap_mapping = overlap;
+    app::SlamSystem slam(gpu, config);
+    Run r{process_all(slam, dataset), {}, {}, slam.mapping_overlapped()};
+    slam.finish();
+    r.trajectory = slam.trajectory();
+    r.map = *slam.map();
+    return r;
+  };
+  const Run in_turn = run(false), overlapped = run(true), again = run(true);
+  EXPECT_FALSE(in_turn.overlapped);
+  ASSERT_TRUE(overlapped.overlapped);
+  std::size_t keyframes = 0;
+  double worst = 0;
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) {
+    EXPECT_EQ(overlapped.records[i].keyframe, in_turn.records[i].keyframe) << "frame " << i;
+    keyframes += overlapped.records[i].keyframe;
+    worst = std::max(worst, largest_difference(overlapped.trajectory[i], in_turn.trajectory[i]));
+    EXPECT_LT(largest_difference(overlapped.trajectory[i], in_turn.trajectory[i]), 1e-6) << "frame " << i;
+    EXPECT_EQ(overlapped.trajectory[i].matrix(), again.trajectory[i].matrix()) << "frame " << i;
+  }
+  EXPECT_GE(keyframes, 3u) << "too few keyframes to overlap anything";
+  std::printf("overlapped vs in turn: %zu keyframes, largest pose difference %.2g\n", keyframes, worst);
+  EXPECT_EQ(overlapped.map.size(), in_turn.map.size());
+  EXPECT_EQ(overlapped.map.means, again.map.means);
+  EXPECT_EQ(overlapped.map.opacity_logits, again.map.opacity_logits);
+}
+
 // A mapper that cannot keep up skips keyframes (the newest one waiting wins) and tracking goes on.
 TEST(SlamSystem, ThreadedMappingSkipsKeyframesItCannotKeepUpWith) {
   gslam::test::TempDir dir;

@@ -2,6 +2,7 @@
 // buffers (bindings 0..n-1, in the order its .comp declares them) and up to 16 bytes of push
 // constants; a batch records dispatches with a full barrier between them, then runs them.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
@@ -64,10 +65,11 @@ class CommandBatch {
   // Drops what was recorded since the last run() (nothing is submitted, no download happens):
   // for an operation that failed half-way, so the next run() does not submit its commands.
   void discard();
-  // Bytes given to upload() and download() since the last reset (mapped or staged alike).
-  std::size_t uploaded_bytes() const { return uploaded_bytes_; }
-  std::size_t downloaded_bytes() const { return downloaded_bytes_; }
-  void reset_transfer_counts() { uploaded_bytes_ = downloaded_bytes_ = 0; }
+  // Bytes given to upload() and download() since the last reset (mapped or staged alike);
+  // another thread may read them (a run's summary while mapping runs).
+  std::size_t uploaded_bytes() const { return uploaded_bytes_.load(std::memory_order_relaxed); }
+  std::size_t downloaded_bytes() const { return downloaded_bytes_.load(std::memory_order_relaxed); }
+  void reset_transfer_counts() { uploaded_bytes_ = 0, downloaded_bytes_ = 0; }
   // GPU time per kernel name over the batches run so far (timestamps after each dispatch;
   // empty if the queue has none), and a reset.
   const std::map<std::string, double>& kernel_ms() const { return kernel_ms_; }
@@ -94,7 +96,7 @@ class CommandBatch {
   VkQueryPool queries_ = VK_NULL_HANDLE;
   std::vector<const char*> timed_;  // kernel name of each timestamp after the first
   std::map<std::string, double> kernel_ms_;
-  std::size_t uploaded_bytes_ = 0, downloaded_bytes_ = 0;
+  std::atomic<std::size_t> uploaded_bytes_{0}, downloaded_bytes_{0};
 };
 
 }  // namespace splat::vk

@@ -1,0 +1,64 @@
+#include "datasets/frame_prefetch.h"
+
+#include <gtest/gtest.h>
+
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "splat/error.h"
+
+namespace {
+
+// A frame that says which index it was read for, and a record of every read.
+struct Reads {
+  std::mutex mutex;
+  std::vector<std::size_t> indices;
+  std::size_t failing = static_cast<std::size_t>(-1);
+  app::FramePrefetch::Load load() {
+    return [this](std::size_t i) {
+      {
+        std::lock_guard lock(mutex);
+        indices.push_back(i);
+      }
+      if (i == failing) throw splat::Error("frame " + std::to_string(i) + ": unreadable");
+      splat::RgbdFrame frame;
+      frame.timestamp = static_cast<double>(i);
+      return frame;
+    };
+  }
+};
+
+TEST(FramePrefetch, GivesEachFrameInOrderReadOnceAndNothingPastTheEnd) {
+  Reads reads;
+  {
+    app::FramePrefetch prefetch(reads.load(), 3, 8);
+    for (std::size_t i = 3; i < 8; ++i) EXPECT_EQ(prefetch.take(i).timestamp, static_cast<double>(i));
+  }
+  EXPECT_EQ(reads.indices, (std::vector<std::size_t>{3, 4, 5, 6, 7}));
+}
+
+TEST(FramePrefetch, ReadsAFrameTakenOutOfOrderAndGoesOnFromIt) {
+  Reads reads;
+  app::FramePrefetch prefetch(reads.load(), 0, 10);
+  EXPECT_EQ(prefetch.take(0).timestamp, 0.0);
+  EXPECT_EQ(prefetch.take(6).timestamp, 6.0);  // frame 1, read ahead, is not given instead
+  EXPECT_EQ(prefetch.take(7).timestamp, 7.0);
+}
+
+TEST(FramePrefetch, ThrowsAFramesReadErrorWhenThatFrameIsTaken) {
+  Reads reads;
+  reads.failing = 2;
+  app::FramePrefetch prefetch(reads.load(), 0, 5);
+  EXPECT_EQ(prefetch.take(0).timestamp, 0.0);
+  EXPECT_EQ(prefetch.take(1).timestamp, 1.0);  // frame 2's read may already have failed
+  try {
+    prefetch.take(2);
+    FAIL() << "frame 2's error was not thrown";
+  } catch (const splat::Error& e) {
+    EXPECT_STREQ(e.what(), "frame 2: unreadable");
+  }
+  EXPECT_EQ(prefetch.take(3).timestamp, 3.0);
+}
+
+}  // namespace
