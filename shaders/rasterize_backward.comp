@@ -48,6 +48,10 @@ void store_sum(uint s, int k, uint slot, float sum) {
 }
 
 void main() {
+  // Whether lanes 0 .. kGradSlots - 1 are all there to store a slot each (a kGroupSize workgroup
+  // fills its subgroups in practice; the API does not promise it).
+  bool lane_per_slot = gl_SubgroupSize >= kGradSlots &&
+                       subgroupAdd(gl_SubgroupInvocationID < kGradSlots ? 1u : 0u) == kGradSlots;
   uint tid = gl_LocalInvocationIndex;
   uvec2 pixel = pixel_coord();
   bool inside = pixel_inside(pixel);
@@ -125,7 +129,6 @@ void main() {
       // Each slot's sum over the subgroup, stored (added into the intersection's slot, or kept
       // as this subgroup's partial) by lane `slot`: one store of kGradSlots lanes rather than
       // kGradSlots stores of one. Subgroups narrower than kGradSlots store one sum at a time.
-      bool lane_per_slot = gl_SubgroupSize >= kGradSlots;
       float mine = 0;
       for (uint slot = 0u; slot < kGradSlots; ++slot) {
         float sum = subgroupAdd(g[slot]);

@@ -248,6 +248,27 @@ class BoundedReader {
   std::uint64_t remaining_ = 0;
 };
 
+// The keyframe overlapped mapping optimized and has not published (SlamSystem::State).
+json unpublished_to_json(const SlamSystem::State::Unpublished& u) {
+  return {{"keyframe", u.keyframe},           {"added", u.stats.added},
+          {"pruned", u.stats.pruned},         {"ghosts", u.stats.ghosts},
+          {"iterations", u.stats.iterations}, {"final_loss", u.stats.final_loss},
+          {"window", u.stats.window},         {"optimize_ms", u.optimize_ms}};
+}
+
+SlamSystem::State::Unpublished unpublished_from_json(const json& j) {
+  SlamSystem::State::Unpublished u;
+  u.keyframe = j.at("keyframe").get<std::size_t>();
+  u.stats.added = j.at("added").get<std::size_t>();
+  u.stats.pruned = j.at("pruned").get<std::size_t>();
+  u.stats.ghosts = j.at("ghosts").get<std::size_t>();
+  u.stats.iterations = j.at("iterations").get<int>();
+  u.stats.final_loss = j.at("final_loss").get<double>();
+  u.stats.window = j.at("window").get<std::size_t>();
+  u.optimize_ms = j.at("optimize_ms").get<double>();
+  return u;
+}
+
 }  // namespace
 
 json pose_to_json(const Eigen::Isometry3d& T) {
@@ -269,7 +290,7 @@ Eigen::Isometry3d pose_from_json(const json& j) {
 
 void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint& checkpoint) {
   const SlamSystem::State& s = checkpoint.slam;
-  const json header = {{"run", checkpoint.run},
+  json header = {{"run", checkpoint.run},
                        {"tracker", tracker_to_json(s.tracker)},
                        {"mapper", mapper_to_json(s.mapper)},
                        {"mapper_keyframes", s.mapper_keyframes},
@@ -281,6 +302,7 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                        {"tracker_correction", pose_to_json(s.tracker_correction)},
                        {"covisible", s.back_end.covisible},
                        {"covisible_rates", s.back_end.covisible_rates}};
+  if (s.unpublished) header["unpublished"] = unpublished_to_json(*s.unpublished);
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
@@ -327,6 +349,7 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     // Checkpoints from before covisibility continue with none (it links the next keyframes).
     c.slam.back_end.covisible = header.value("covisible", std::vector<std::size_t>{});
     c.slam.back_end.covisible_rates = header.value("covisible_rates", std::vector<double>{});
+    if (header.contains("unpublished")) c.slam.unpublished = unpublished_from_json(header.at("unpublished"));
   } catch (const json::exception& e) {
     fail(path, std::string("malformed checkpoint header: ") + e.what());
   } catch (const splat::Error& e) {

@@ -99,8 +99,9 @@ struct SlamConfig {
   // Sequential runs (reconstruct) mapping on the backend's device (the resident map): a
   // keyframe's optimization runs on a thread of its own while the next frames are tracked, and
   // what depends on it (loop closure, covisibility, the map and keyframe poses tracking sees) is
-  // applied when the next keyframe comes, so a run still gives the same result every time. Only
-  // where tracking never renders (the odometry front end, keyframe_render_iterations 0). The CPU
+  // applied when the next keyframe comes, whatever the timing: as repeatable as mapping in turn
+  // (bit for bit with the portable reduction), a checkpoint included. Only where tracking never
+  // renders (the odometry front end, keyframe_render_iterations 0). The CPU
   // backend maps in turn with tracking: its mapping takes every core, and overlapping it was no
   // faster (docs/vulkan.md). false: in turn everywhere.
   bool overlap_mapping = true;

@@ -42,7 +42,7 @@ SlamSystem::SlamSystem(splat::Rasterizer& tracking_rasterizer, splat::Rasterizer
 }
 
 SlamSystem::~SlamSystem() {
-  if (in_flight_) in_flight_->optimized.wait();  // its error, if any, goes unreported
+  if (in_flight_ && in_flight_->optimized.valid()) in_flight_->optimized.wait();  // its error goes unreported
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
@@ -208,19 +208,31 @@ double SlamSystem::publish_keyframe(const KeyframeJob& job, const mapping::Mappi
 }
 
 void SlamSystem::start_overlapped(KeyframeJob job) {
-  in_flight_ = std::make_unique<InFlight>(InFlight{std::move(job), {}});
-  in_flight_->optimized = std::async(std::launch::async, [this, &job = in_flight_->job] {
+  auto flight = std::make_unique<InFlight>(InFlight{std::move(job), {}, {}});
+  flight->optimized = std::async(std::launch::async, [this, &job = flight->job] {
     const auto start = std::chrono::steady_clock::now();
     mapping::MappingStats stats = optimize_keyframe(job);
     return std::make_pair(stats, ms_since(start));
   });
+  in_flight_ = std::move(flight);  // only once its thread runs
+}
+
+void SlamSystem::join_overlapped() {
+  if (!in_flight_ || in_flight_->joined) return;
+  try {
+    in_flight_->joined = in_flight_->optimized.get();
+  } catch (...) {
+    in_flight_.reset();
+    throw;
+  }
 }
 
 double SlamSystem::finish_overlapped() {
   if (!in_flight_) return 0;
   const auto start = std::chrono::steady_clock::now();
+  join_overlapped();
   const std::unique_ptr<InFlight> done = std::move(in_flight_);
-  const auto [stats, optimize_ms] = done->optimized.get();
+  const auto [stats, optimize_ms] = *done->joined;
   publish_keyframe(done->job, stats, optimize_ms);
   apply_tracker_correction();  // a loop it closed moves the motion model now
   return ms_since(start);
@@ -360,10 +372,20 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
 }
 
 SlamSystem::State SlamSystem::state() {
-  wait_for_mapping();
+  // Overlapped, the keyframe in flight is only joined: publishing it here would make a run that
+  // saves its state differ from one that does not.
+  if (overlapped_) {
+    join_overlapped();
+  } else {
+    wait_for_mapping();
+  }
   std::lock_guard lock(mutex_);
-  return {tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
-          back_end_.state(), loop_events_,     tracker_correction_};
+  State s{tracker_.state(), mapper_.state(), mapper_keyframes_, keyframe_world_, frames_, totals_,
+          back_end_.state(), loop_events_,     tracker_correction_, {}};
+  if (in_flight_) {
+    s.unpublished = State::Unpublished{in_flight_->job.keyframe, in_flight_->joined->first, in_flight_->joined->second};
+  }
+  return s;
 }
 
 void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size_t)>& load) {
@@ -397,18 +419,36 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   };
   tracker_.restore(s.tracker, keyframe);
   back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe);
+  std::unique_ptr<InFlight> unpublished;
+  if (s.unpublished) {  // the newest keyframe, as process() handed it to mapping
+    const State::Unpublished& u = *s.unpublished;
+    if (u.keyframe + 1 != keyframe_frame.size() || s.mapper_keyframes.empty() || s.mapper_keyframes.back() != u.keyframe) {
+      inconsistent("the unpublished keyframe " + std::to_string(u.keyframe) + " is not the newest one mapped");
+    }
+    KeyframeJob job{keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}};
+    s.frames[keyframe_frame[u.keyframe]].moving.apply(job.frame);
+    if (config_.front_end == "odometry") {
+      job.prepared = tracker_.newest_reference();
+      job.odometry = tracker_.odometry_config();
+    }
+    unpublished = std::make_unique<InFlight>(InFlight{std::move(job), {}, std::make_pair(u.stats, u.optimize_ms)});
+  }
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
     if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
     return keyframe(s.mapper_keyframes[number]);
   });
-  std::lock_guard lock(mutex_);
-  mapper_keyframes_ = std::move(s.mapper_keyframes);
-  keyframe_world_ = std::move(s.keyframe_world);
-  frames_ = std::move(s.frames);
-  totals_ = s.totals;
-  loop_events_ = std::move(s.loop_events);
-  tracker_correction_ = s.tracker_correction;
-  map_ = std::make_shared<const splat::Gaussians>(mapper_.map());
+  {
+    std::lock_guard lock(mutex_);
+    mapper_keyframes_ = std::move(s.mapper_keyframes);
+    keyframe_world_ = std::move(s.keyframe_world);
+    frames_ = std::move(s.frames);
+    totals_ = s.totals;
+    loop_events_ = std::move(s.loop_events);
+    tracker_correction_ = s.tracker_correction;
+    map_ = std::make_shared<const splat::Gaussians>(mapper_.map());
+  }
+  in_flight_ = std::move(unpublished);
+  if (!overlapped_) finish_overlapped();  // continued in turn: published now
 }
 
 void SlamSystem::mapping_loop() {

@@ -5,8 +5,8 @@
 //   frame is tracked, so a run is deterministic. With SlamConfig::overlap_mapping (mapping on
 //   the device, tracking never rendering) a keyframe's optimization runs on a thread of its own
 //   while the next frames are tracked, and the rest of its mapping (loops, covisibility,
-//   publishing) runs when the next keyframe comes, on the caller's thread: still the same result
-//   every run;
+//   publishing) runs when the next keyframe comes, on the caller's thread, whatever the timing
+//   (a checkpoint carries the keyframe not yet published);
 // - threaded (`gslam live`): mapping runs on a thread of its own with its own rasterizer.
 //   Keyframes wait in a one-slot queue; a newer keyframe replaces a waiting one (counted as
 //   skipped), so tracking never waits for mapping. Skipped keyframes are kept in a backlog
@@ -149,6 +149,14 @@ class SlamSystem {
     BackEnd::State back_end;  // the keyframe pose graph's edges, covisibility's recent keyframes
     std::vector<LoopEvent> loop_events;
     Eigen::Isometry3d tracker_correction = Eigen::Isometry3d::Identity();  // not yet applied
+    // Overlapped: the newest keyframe, optimized (it is in `mapper`) but not yet published; the
+    // continued run publishes it at the next keyframe, as the run that never stopped does.
+    struct Unpublished {
+      std::size_t keyframe = 0;  // its number among the system's keyframes
+      mapping::MappingStats stats;
+      double optimize_ms = 0;
+    };
+    std::optional<Unpublished> unpublished;
   };
   // The state between two frames (threaded: once mapping is idle).
   State state();
@@ -179,10 +187,11 @@ class SlamSystem {
   // `optimize_ms` and return the sum.
   mapping::MappingStats optimize_keyframe(const KeyframeJob& job);
   double publish_keyframe(const KeyframeJob& job, const mapping::MappingStats& stats, double optimize_ms);
-  // Overlapped: optimizes `job` on a thread of its own; finish_overlapped() waits for the one in
-  // flight (rethrowing its error), publishes it and moves tracking with the loops it closed, and
-  // returns the time that took (0 when none was in flight).
+  // Overlapped: optimizes `job` on a thread of its own; join_overlapped() waits for it
+  // (rethrowing its error); finish_overlapped() joins it, publishes it and moves tracking with
+  // the loops it closed, and returns the time that took (0 when none was in flight).
   void start_overlapped(KeyframeJob job);
+  void join_overlapped();
   double finish_overlapped();
   // Loop closure for a keyframe just mapped (the mapping thread's), then covisibility: the back
   // end's solutions applied to the keyframes, the map and tracking.
@@ -210,8 +219,9 @@ class SlamSystem {
   struct InFlight {
     KeyframeJob job;
     std::future<std::pair<mapping::MappingStats, double>> optimized;  // and its time in ms
+    std::optional<std::pair<mapping::MappingStats, double>> joined;   // once it has ended
   };
-  std::unique_ptr<InFlight> in_flight_;  // overlapped: the keyframe being optimized
+  std::unique_ptr<InFlight> in_flight_;  // overlapped: the keyframe optimized, not yet published
   std::vector<std::size_t> mapper_keyframes_;  // the system's keyframe number per mapper number
 
   mutable std::mutex mutex_;  // guards everything below

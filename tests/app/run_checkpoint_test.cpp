@@ -1,6 +1,8 @@
 // Checkpoints: a run stopped, written to a checkpoint, read back and continued ends exactly as
 // the run that never stopped; hostile checkpoint files get one-line errors.
 #include <cstring>
+#include <functional>
+#include <memory>
 
 #include <gtest/gtest.h>
 
@@ -8,6 +10,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "io/run_checkpoint.h"
 #include "slam/slam_system.h"
+#include "splat/vulkan_rasterizer.h"
 #include "support/backends.h"
 #include "support/expect_error.h"
 #include "support/synthetic_dataset.h"
@@ -35,19 +38,27 @@ app::SlamConfig checkpoint_config() {
 struct RunResult {
   std::vector<Eigen::Isometry3d> trajectory;
   splat::Gaussians map;
+  bool overlapped = false;  // SlamSystem::mapping_overlapped()
 };
+
+using MakeRasterizer = std::function<std::unique_ptr<splat::Rasterizer>()>;
+std::unique_ptr<splat::Rasterizer> cpu_rasterizer() { return splat::make_cpu_rasterizer({2}); }
 
 // Processes frames [0, stop), checkpoints through `file`, continues in a new system (and a new
 // rasterizer) from [stop, end), then sweeps. stop = end: never checkpointed.
-RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesystem::path& file) {
+RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesystem::path& file,
+              const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
   const auto load = [&](std::size_t i) { return dataset.load(i); };
   const app::SlamConfig config = checkpoint_config();
-  auto first_rasterizer = splat::make_cpu_rasterizer({2});
+  // Both made before the system, so that they outlive it (its resident map is the device's).
+  auto first_rasterizer = make_rasterizer(), second_rasterizer = make_rasterizer();
   auto slam = std::make_unique<app::SlamSystem>(*first_rasterizer, config);
   for (std::size_t i = 0; i < stop; ++i) slam->process(load(i));
-  auto second_rasterizer = splat::make_cpu_rasterizer({2});
   if (stop < dataset.entries.size()) {
-    app::write_run_checkpoint(file, {slam->state(), {{"note", "test"}}});
+    const app::SlamSystem::State state = slam->state();
+    // Overlapped, the newest keyframe is still being optimized: the checkpoint carries it.
+    EXPECT_EQ(state.unpublished.has_value(), slam->mapping_overlapped()) << "stopped at " << stop;
+    app::write_run_checkpoint(file, {state, {{"note", "test"}}});
     slam = std::make_unique<app::SlamSystem>(*second_rasterizer, config);
     const app::RunCheckpoint read = app::read_run_checkpoint(file);
     EXPECT_EQ(read.run.at("note"), "test");
@@ -57,22 +68,24 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
   std::size_t moved = 0;  // frames whose depth was moved to its colour's instant
   for (const auto& f : slam->state().frames) moved += !f.T_colour_depth.isApprox(Eigen::Isometry3d::Identity());
   EXPECT_GT(moved, 3u);
+  const bool overlapped = slam->mapping_overlapped();
   slam->refine_map(load);
   EXPECT_GT(slam->mapping_totals().covisible_edges, 0u);
-  return {slam->trajectory(), *slam->map()};
+  return {slam->trajectory(), *slam->map(), overlapped};
 }
 
-TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
-  gslam::test::TempDir dir;
-  app::SyntheticOptions o;
-  o.frames = 14;
-  o.shake_peak_rate = 1.0;
-  o.depth_lag = 0.012;  // depth moved to the colour's instant: the checkpoint carries how
-  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
-  const RunResult straight = run(dataset, dataset.entries.size(), {});
-  for (std::size_t stop : {1u, 6u, 11u}) {
-    const RunResult resumed = run(dataset, stop, dir / "checkpoint.bin");
-    ASSERT_EQ(resumed.trajectory.size(), straight.trajectory.size());
+// Stopped at each of `stops`, the run ends bit for bit as the one that never stopped. Returns
+// whether mapping overlapped tracking.
+bool expect_continued_runs_end_as_the_straight_one(const app::Dataset& dataset, const std::vector<std::size_t>& stops,
+                                                   const std::filesystem::path& file,
+                                                   const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
+  const RunResult straight = run(dataset, dataset.entries.size(), {}, make_rasterizer);
+  for (std::size_t stop : stops) {
+    const RunResult resumed = run(dataset, stop, file, make_rasterizer);
+    if (resumed.trajectory.size() != straight.trajectory.size()) {
+      ADD_FAILURE() << "stopped at " << stop << ": " << resumed.trajectory.size() << " poses, " << straight.trajectory.size() << " straight";
+      continue;
+    }
     for (std::size_t i = 0; i < straight.trajectory.size(); ++i) {
       const Eigen::Matrix4d& a = straight.trajectory[i].matrix();
       const Eigen::Matrix4d& b = resumed.trajectory[i].matrix();
@@ -82,6 +95,38 @@ TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
     EXPECT_EQ(resumed.map.sh, straight.map.sh) << "stopped at " << stop;
     EXPECT_EQ(resumed.map.opacity_logits, straight.map.opacity_logits) << "stopped at " << stop;
   }
+  return straight.overlapped;
+}
+
+TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 14;
+  o.shake_peak_rate = 1.0;
+  o.depth_lag = 0.012;  // depth moved to the colour's instant: the checkpoint carries how
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  EXPECT_FALSE(expect_continued_runs_end_as_the_straight_one(dataset, {1u, 6u, 11u}, dir / "checkpoint.bin"));
+}
+
+// Mapping on the device overlaps tracking: a checkpoint taken while a keyframe is optimized
+// carries it unpublished, and the continued run publishes it where the straight run does (the
+// portable reduction, which repeats itself bit for bit).
+TEST(RunCheckpoint, OverlappedDeviceMappingContinuesExactlyAsTheRunThatNeverStopped) {
+  GSLAM_REQUIRE_BACKEND(gpu, "vulkan_portable");
+  (void)gpu;  // there is a device: the runs make rasterizers of their own, as a resumed run does
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 8;
+  o.width = 160, o.height = 120, o.focal = 130;
+  o.shake_peak_rate = 1.0;
+  o.depth_lag = 0.012;
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  const MakeRasterizer portable = [] {
+    splat::VulkanOptions options;
+    options.float_atomics = false;
+    return splat::make_vulkan_rasterizer(options);
+  };
+  EXPECT_TRUE(expect_continued_runs_end_as_the_straight_one(dataset, {3u}, dir / "checkpoint.bin", portable));
 }
 
 TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {

@@ -375,7 +375,7 @@ TEST(SlamSystem, OverlappedDeviceMappingGivesTheInTurnResultEveryRun) {
   GSLAM_REQUIRE_BACKEND(gpu, "vulkan_portable");
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
-  o.frames = 12;
+  o.frames = 6;
   o.width = 160, o.height = 120, o.focal = 130;
   const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   app::SlamConfig config;
