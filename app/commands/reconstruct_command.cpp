@@ -13,8 +13,8 @@
 #include "io/run_checkpoint.h"
 #include "io/run_folder.h"
 #include "io/slam_config_io.h"
+#include "slam/frame_prefetch.h"
 #include "slam/slam_system.h"
-#include "datasets/frame_prefetch.h"
 #include "datasets/synthetic_sequence.h"
 #include "splat/error.h"
 

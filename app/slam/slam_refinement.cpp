@@ -4,6 +4,7 @@
 #include <optional>
 #include <random>
 
+#include "slam/frame_prefetch.h"
 #include "slam/slam_system.h"
 #include "tracking/tracker.h"
 
@@ -67,9 +68,10 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
   std::vector<std::optional<splat::RgbdFrame>> cache(T_world_cam.size());
   splat::RgbdFrame uncached;
   double cached_mib = 0;
+  FramePrefetch prefetch(load, frames);  // the first visits (carving) go through them in turn
   auto frame_at = [&](std::size_t i) -> const splat::RgbdFrame& {
     if (cache[i]) return *cache[i];
-    splat::RgbdFrame loaded = load(i);
+    splat::RgbdFrame loaded = prefetch.take(i);
     {
       std::lock_guard lock(mutex_);
       // Its depth moved as process() moved it, and moving objects left out of the map.

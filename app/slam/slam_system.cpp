@@ -417,6 +417,12 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     const Eigen::Isometry3d& T = s.frames[i].T_colour_depth;
     return T.isApprox(Eigen::Isometry3d::Identity()) ? frame : splat::with_depth_at_colour_time(frame, T);
   };
+  // As mapping was given them: without the moving objects tracking found in them.
+  auto mapped_keyframe = [&](std::size_t number) {
+    splat::RgbdFrame frame = keyframe(number);
+    s.frames[keyframe_frame[number]].moving.apply(frame);
+    return frame;
+  };
   tracker_.restore(s.tracker, keyframe);
   back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe);
   std::unique_ptr<InFlight> unpublished;
@@ -425,8 +431,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     if (u.keyframe + 1 != keyframe_frame.size() || s.mapper_keyframes.empty() || s.mapper_keyframes.back() != u.keyframe) {
       inconsistent("the unpublished keyframe " + std::to_string(u.keyframe) + " is not the newest one mapped");
     }
-    KeyframeJob job{keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}};
-    s.frames[keyframe_frame[u.keyframe]].moving.apply(job.frame);
+    KeyframeJob job{mapped_keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}};
     if (config_.front_end == "odometry") {
       job.prepared = tracker_.newest_reference();
       job.odometry = tracker_.odometry_config();
@@ -435,7 +440,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   }
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {
     if (number >= s.mapper_keyframes.size()) inconsistent("mapper keyframe " + std::to_string(number) + " does not exist");
-    return keyframe(s.mapper_keyframes[number]);
+    return mapped_keyframe(s.mapper_keyframes[number]);
   });
   {
     std::lock_guard lock(mutex_);

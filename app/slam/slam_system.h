@@ -114,7 +114,8 @@ class SlamSystem {
     bool stopped = false;  // stop() ended it early
   };
   // The final sweep (SlamConfig::refine_passes) over refine_frames(), each loaded with
-  // load(frame index) and kept while refine_cache_mib allows, in a shuffled order that is the
+  // load(frame index) (the next one read ahead on a thread of its own) and kept while
+  // refine_cache_mib allows, in a shuffled order that is the
   // same on every run; the first passes densify (refine_densify_passes). Where
   // MapperConfig::refine_pose_learning_rate > 0 (off by default), visited frames but the first
   // (the world frame) move with the map, and trajectory() returns the moved poses. Then prunes,

@@ -1,7 +1,8 @@
-#include "datasets/frame_prefetch.h"
+#include "slam/frame_prefetch.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -38,12 +39,18 @@ TEST(FramePrefetch, GivesEachFrameInOrderReadOnceAndNothingPastTheEnd) {
   EXPECT_EQ(reads.indices, (std::vector<std::size_t>{3, 4, 5, 6, 7}));
 }
 
-TEST(FramePrefetch, ReadsAFrameTakenOutOfOrderAndGoesOnFromIt) {
+TEST(FramePrefetch, FollowsAnOrderAndReadsFramesTakenOutOfItThemselves) {
   Reads reads;
-  app::FramePrefetch prefetch(reads.load(), 0, 10);
-  EXPECT_EQ(prefetch.take(0).timestamp, 0.0);
-  EXPECT_EQ(prefetch.take(6).timestamp, 6.0);  // frame 1, read ahead, is not given instead
-  EXPECT_EQ(prefetch.take(7).timestamp, 7.0);
+  {
+    app::FramePrefetch prefetch(reads.load(), std::vector<std::size_t>{4, 1, 7});
+    EXPECT_EQ(prefetch.take(4).timestamp, 4.0);
+    EXPECT_EQ(prefetch.take(6).timestamp, 6.0);  // frame 1, read ahead, is not given instead
+    EXPECT_EQ(prefetch.take(1).timestamp, 1.0);  // ... but when its turn comes
+    EXPECT_EQ(prefetch.take(7).timestamp, 7.0);
+    EXPECT_EQ(prefetch.take(4).timestamp, 4.0);  // again: read again
+  }
+  std::sort(reads.indices.begin(), reads.indices.end());
+  EXPECT_EQ(reads.indices, (std::vector<std::size_t>{1, 4, 4, 6, 7}));
 }
 
 TEST(FramePrefetch, ThrowsAFramesReadErrorWhenThatFrameIsTaken) {
