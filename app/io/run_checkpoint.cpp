@@ -6,6 +6,7 @@
 
 #include "io/atomic_file.h"
 #include "io/file_error.h"
+#include "tracking/moving_regions.h"
 
 namespace app {
 namespace {
@@ -36,19 +37,97 @@ std::vector<Eigen::Isometry3d> poses_from_json(const json& j) {
   return poses;
 }
 
-json tracker_to_json(const FrameTracker::State& t) {
-  return {{"last_poses", poses_to_json(t.last_poses)}, {"last_times", t.last_times},
-          {"last_keyframe", pose_to_json(t.last_keyframe)}, {"since_keyframe", t.since_keyframe},
-          {"references", t.references}, {"reference_rates", t.reference_rates}, {"residual_scales", t.residual_scales},
-          {"exposure_samples", t.exposure_samples}};
+// Moving-region labels (tracking::MovingLabel per pixel) as [label, run length] pairs: they are
+// mostly static pixels.
+json labels_to_json(const std::vector<uint8_t>& labels) {
+  json runs = json::array();
+  for (std::size_t i = 0; i < labels.size();) {
+    std::size_t end = i;
+    while (end < labels.size() && labels[end] == labels[i]) ++end;
+    runs.push_back({labels[i], end - i});
+    i = end;
+  }
+  return runs;
 }
 
-FrameTracker::State tracker_from_json(const json& j) {
-  return {poses_from_json(j.at("last_poses")), j.at("last_times").get<std::vector<double>>(),
-          pose_from_json(j.at("last_keyframe")), j.at("since_keyframe").get<int>(),
-          j.at("references").get<std::vector<std::size_t>>(), j.at("reference_rates").get<std::vector<double>>(),
-          j.at("residual_scales").get<std::vector<double>>(),
-          j.at("exposure_samples").get<std::vector<std::array<double, 2>>>()};
+// All the moving labels a checkpoint may hold, in pixels: a crafted run length of a few bytes
+// must not claim gigabytes. Tracking keeps a few sets at the moving regions' scale, which is at
+// most a few hundred pixels wide (19,200 pixels a set at the default 160 px).
+constexpr std::uint64_t kMaxLabelPixels = 16ull << 20;
+
+// Throws splat::Error for a pair that is not a label and a length, or for more pixels than
+// `pixels_left` (what the checkpoint's other sets left of kMaxLabelPixels).
+std::vector<uint8_t> labels_from_json(const json& j, const std::string& what,
+                                      std::uint64_t& pixels_left) {
+  std::vector<uint8_t> labels;
+  if (!j.is_array()) throw splat::Error(what + ": not a list of [label, length] runs");
+  for (const json& run : j) {
+    if (!run.is_array() || run.size() != 2 || !run[0].is_number_unsigned() ||
+        !run[1].is_number_unsigned() || run[0].get<std::uint64_t>() > tracking::kOutline) {
+      throw splat::Error(what + ": a run is not a label (0-" +
+                         std::to_string(int(tracking::kOutline)) + ") and a length");
+    }
+    const std::uint64_t length = run[1].get<std::uint64_t>();
+    if (length > pixels_left) {
+      throw splat::Error(what + ": more than the " + std::to_string(kMaxLabelPixels) +
+                         " label pixels a checkpoint holds");
+    }
+    pixels_left -= length;
+    labels.insert(labels.end(), static_cast<std::size_t>(length), run[0].get<uint8_t>());
+  }
+  return labels;
+}
+
+json label_sets_to_json(const std::vector<std::vector<uint8_t>>& sets) {
+  json j = json::array();
+  for (const auto& labels : sets) j.push_back(labels_to_json(labels));
+  return j;
+}
+
+// Keyframes' moving labels, in the order of their list; `what` names the list.
+std::vector<std::vector<uint8_t>> label_sets_from_json(const json& j, const std::string& what,
+                                                       std::uint64_t& pixels_left) {
+  if (!j.is_array()) throw splat::Error(what + "' moving labels are not a list");
+  std::vector<std::vector<uint8_t>> sets;
+  for (std::size_t k = 0; k < j.size(); ++k) {
+    sets.push_back(
+        labels_from_json(j[k], what + " " + std::to_string(k) + "'s moving labels", pixels_left));
+  }
+  return sets;
+}
+
+json tracker_to_json(const FrameTracker::State& t) {
+  return {{"last_poses", poses_to_json(t.last_poses)},
+          {"last_times", t.last_times},
+          {"last_keyframe", pose_to_json(t.last_keyframe)},
+          {"since_keyframe", t.since_keyframe},
+          {"references", t.references},
+          {"reference_rates", t.reference_rates},
+          {"residual_scales", t.residual_scales},
+          {"exposure_samples", t.exposure_samples},
+          {"reference_labels", label_sets_to_json(t.reference_labels)},
+          {"moving", labels_to_json(t.moving)}};
+}
+
+FrameTracker::State tracker_from_json(const json& j, std::uint64_t& label_pixels_left) {
+  FrameTracker::State t{poses_from_json(j.at("last_poses")),
+                        j.at("last_times").get<std::vector<double>>(),
+                        pose_from_json(j.at("last_keyframe")),
+                        j.at("since_keyframe").get<int>(),
+                        j.at("references").get<std::vector<std::size_t>>(),
+                        j.at("reference_rates").get<std::vector<double>>(),
+                        j.at("residual_scales").get<std::vector<double>>(),
+                        j.at("exposure_samples").get<std::vector<std::array<double, 2>>>(),
+                        {},
+                        {}};
+  // Checkpoints written before the moving regions were kept have neither (nothing left out).
+  if (j.contains("reference_labels"))
+    t.reference_labels =
+        label_sets_from_json(j.at("reference_labels"), "tracking's references", label_pixels_left);
+  if (j.contains("moving"))
+    t.moving =
+        labels_from_json(j.at("moving"), "the last frame's moving labels", label_pixels_left);
+  return t;
 }
 
 json mapper_to_json(const mapping::MapperState& m) {
@@ -291,17 +370,18 @@ Eigen::Isometry3d pose_from_json(const json& j) {
 void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint& checkpoint) {
   const SlamSystem::State& s = checkpoint.slam;
   json header = {{"run", checkpoint.run},
-                       {"tracker", tracker_to_json(s.tracker)},
-                       {"mapper", mapper_to_json(s.mapper)},
-                       {"mapper_keyframes", s.mapper_keyframes},
-                       {"keyframe_world", poses_to_json(s.keyframe_world)},
-                       {"frames", frames_to_json(s.frames)},
-                       {"totals", totals_to_json(s.totals)},
-                       {"edges", edges_to_json(s.back_end.edges)},
-                       {"loop_events", loop_events_to_json(s.loop_events)},
-                       {"tracker_correction", pose_to_json(s.tracker_correction)},
-                       {"covisible", s.back_end.covisible},
-                       {"covisible_rates", s.back_end.covisible_rates}};
+                 {"tracker", tracker_to_json(s.tracker)},
+                 {"mapper", mapper_to_json(s.mapper)},
+                 {"mapper_keyframes", s.mapper_keyframes},
+                 {"keyframe_world", poses_to_json(s.keyframe_world)},
+                 {"frames", frames_to_json(s.frames)},
+                 {"totals", totals_to_json(s.totals)},
+                 {"edges", edges_to_json(s.back_end.edges)},
+                 {"loop_events", loop_events_to_json(s.loop_events)},
+                 {"tracker_correction", pose_to_json(s.tracker_correction)},
+                 {"covisible", s.back_end.covisible},
+                 {"covisible_rates", s.back_end.covisible_rates},
+                 {"covisible_labels", label_sets_to_json(s.back_end.covisible_labels)}};
   if (s.unpublished) header["unpublished"] = unpublished_to_json(*s.unpublished);
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
@@ -337,7 +417,8 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
   try {
     const json header = json::parse(text);
     c.run = header.at("run");
-    c.slam.tracker = tracker_from_json(header.at("tracker"));
+    std::uint64_t label_pixels_left = kMaxLabelPixels;
+    c.slam.tracker = tracker_from_json(header.at("tracker"), label_pixels_left);
     c.slam.mapper = mapper_from_json(header.at("mapper"));
     c.slam.mapper_keyframes = header.at("mapper_keyframes").get<std::vector<std::size_t>>();
     c.slam.keyframe_world = poses_from_json(header.at("keyframe_world"));
@@ -349,6 +430,10 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     // Checkpoints from before covisibility continue with none (it links the next keyframes).
     c.slam.back_end.covisible = header.value("covisible", std::vector<std::size_t>{});
     c.slam.back_end.covisible_rates = header.value("covisible_rates", std::vector<double>{});
+    if (header.contains("covisible_labels")) {
+      c.slam.back_end.covisible_labels = label_sets_from_json(
+          header.at("covisible_labels"), "covisibility's keyframes", label_pixels_left);
+    }
     if (header.contains("unpublished")) c.slam.unpublished = unpublished_from_json(header.at("unpublished"));
   } catch (const json::exception& e) {
     fail(path, std::string("malformed checkpoint header: ") + e.what());

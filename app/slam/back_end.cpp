@@ -202,6 +202,7 @@ BackEnd::State BackEnd::state() const {
   for (const FrameTracker::PreparedKeyframe& k : covisible_) {
     s.covisible.push_back(k.keyframe);
     s.covisible_rates.push_back(k.angular_rate);
+    s.covisible_labels.push_back(k.labels);
   }
   return s;
 }
@@ -213,14 +214,18 @@ void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::siz
     if (e.i >= keyframes || e.j >= keyframes) inconsistent("a pose graph edge names a keyframe that does not exist");
   }
   if (s.covisible_rates.size() != s.covisible.size() ||
+      (!s.covisible_labels.empty() && s.covisible_labels.size() != s.covisible.size()) ||
       s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
     inconsistent(std::to_string(s.covisible.size()) + " covisible keyframes with " + std::to_string(s.covisible_rates.size()) +
                  " rates");
   }
   for (std::size_t k = 0; k < s.covisible.size(); ++k) {
-    // Prepared as tracking prepares a reference it restores (FrameTracker::restore).
-    covisible_.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(s.covisible[k]), config_.odometry),
-                          s.covisible[k], s.covisible_rates[k]});
+    // Prepared as tracking prepared it, its moving regions left out (none in a checkpoint from
+    // before they were kept).
+    std::vector<uint8_t> labels =
+        s.covisible_labels.empty() ? std::vector<uint8_t>{} : std::move(s.covisible_labels[k]);
+    covisible_.push_back({prepare_odometry_frame(keyframe(s.covisible[k]), labels, config_),
+                          s.covisible[k], s.covisible_rates[k], std::move(labels)});
   }
   {
     std::lock_guard lock(places_mutex_);

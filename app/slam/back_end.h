@@ -65,6 +65,8 @@ class BackEnd {
     std::vector<tracking::PoseGraphEdge> edges;
     std::vector<std::size_t> covisible;
     std::vector<double> covisible_rates;
+    std::vector<std::vector<uint8_t>>
+        covisible_labels;  // their moving regions (FrameTracker::PreparedKeyframe)
   };
   State state() const;
   // Continues from `state` on a back end that has seen nothing: `keyframe(number)` gives a

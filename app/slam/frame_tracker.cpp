@@ -27,6 +27,53 @@ std::vector<uint8_t> upsample_labels(const std::vector<uint8_t>& labels, int lab
   return out;
 }
 
+int moving_factor(int width, const SlamConfig& config) {
+  const std::vector<int> factors = tracking::OdometryFrame::factors(width, config.odometry);
+  std::size_t level = 0;
+  while (level + 1 < factors.size() && width / factors[level + 1] <= config.moving.max_width)
+    ++level;
+  return factors[level];
+}
+
+namespace {
+
+// Throws splat::Error unless `labels` are empty or of the moving regions' size for `frame`.
+void check_labels_fit(const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels,
+                      const SlamConfig& config) {
+  const int factor = moving_factor(frame.width(), config);
+  const int labels_width = frame.width() / factor, labels_height = frame.height() / factor;
+  if (!labels.empty() && labels.size() != static_cast<std::size_t>(labels_width) *
+                                              static_cast<std::size_t>(labels_height)) {
+    throw splat::Error(std::to_string(labels.size()) + " moving labels do not fit a frame of " +
+                       std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + " (" +
+                       std::to_string(labels_width) + "x" + std::to_string(labels_height) +
+                       " labels)");
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
+    const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels, const SlamConfig& config) {
+  if (labels.empty())
+    return std::make_shared<const tracking::OdometryFrame>(frame, config.odometry);
+  check_labels_fit(frame, labels, config);
+  const int factor = moving_factor(frame.width(), config);
+  splat::RgbdFrame masked = frame;
+  const std::vector<uint8_t> spread =
+      upsample_labels(labels, frame.width() / factor, factor, frame.width(), frame.height());
+  // Where an object left, the frame shows the static scene: only where one stands (and around
+  // it) is ignored, besides what the frame ignores itself (classes its labels call dynamic).
+  if (masked.ignore.empty()) masked.ignore.assign(spread.size(), 0);
+  for (std::size_t i = 0; i < spread.size(); ++i) {
+    const uint8_t why = spread[i] == tracking::kArrived   ? tracking::kMovingSurface
+                        : spread[i] == tracking::kOutline ? tracking::kOutlineIgnored
+                                                          : 0;
+    masked.ignore[i] = std::max(masked.ignore[i], why);
+  }
+  return std::make_shared<const tracking::OdometryFrame>(masked, config.odometry);
+}
+
 double residual_ratio(double scale, std::vector<double> recent) {
   if (recent.size() < 5) return 0;
   std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
@@ -45,7 +92,8 @@ void FrameTracker::start(const splat::RgbdFrame& frame) {
   since_keyframe_ = 0;
   references_.clear();
   if (config_.front_end == "odometry") {
-    references_.push_front({std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry), 0});
+    references_.push_front(
+        {std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry), 0, 0, {}});
   }
 }
 
@@ -125,33 +173,16 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   return r.converged;
 }
 
-std::shared_ptr<const tracking::OdometryFrame> FrameTracker::prepare(const splat::RgbdFrame& frame,
-                                                                   const std::vector<uint8_t>& labels) const {
-  if (labels.empty()) return std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry);
-  splat::RgbdFrame masked = frame;
-  const std::vector<uint8_t> spread =
-      upsample_labels(labels, frame.width() / moving_factor_, moving_factor_, frame.width(), frame.height());
-  // Where an object left, the frame shows the static scene: only where one stands (and around
-  // it) is ignored, besides what the frame ignores itself (classes its labels call dynamic).
-  if (masked.ignore.empty()) masked.ignore.assign(spread.size(), 0);
-  for (std::size_t i = 0; i < spread.size(); ++i) {
-    const uint8_t why = spread[i] == tracking::kArrived ? tracking::kMovingSurface
-                        : spread[i] == tracking::kOutline ? tracking::kOutlineIgnored
-                                                          : 0;
-    masked.ignore[i] = std::max(masked.ignore[i], why);
-  }
-  return std::make_shared<const tracking::OdometryFrame>(masked, config_.odometry);
+void FrameTracker::prepare_last(const splat::RgbdFrame& frame, std::vector<uint8_t> labels) {
+  last_prepared_ = prepare_odometry_frame(frame, labels, config_);
+  last_prepared_labels_ = std::move(labels);
 }
 
 void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                   const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                                   FrameRecord& record) {
   const bool detect = config_.moving.enabled;
-  // The scale of tracking::moving_level(): the finest level at most max_width wide.
-  const std::vector<int> factors = tracking::OdometryFrame::factors(frame.width(), config_.odometry);
-  std::size_t level = 0;
-  while (level + 1 < factors.size() && frame.width() / factors[level + 1] <= config_.moving.max_width) ++level;
-  moving_factor_ = factors[level];
+  moving_factor_ = app::moving_factor(frame.width(), config_);
   // The previous frame's moving regions, grown to where they may have gone, stay out of the
   // first alignment: a large moving object could pull it off before its regions are found.
   const std::vector<uint8_t> prior =
@@ -175,12 +206,12 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
     record.T_colour_depth = T_colour_depth;
     return *moved_;
   };
-  last_prepared_ = prepare(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
+  prepare_last(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
   bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
   const double step = last_times_.empty() ? 0 : frame.timestamp - last_times_.back();
   if (tracked && shift_px >= 0.5 && step > 0) {
     const Eigen::Isometry3d motion = last_poses_.back().inverse() * record.T_world_cam;
-    last_prepared_ = prepare(depth_moved_by(splat::se3_exp(offset / step * splat::se3_log(motion))), prior);
+    prepare_last(depth_moved_by(splat::se3_exp(offset / step * splat::se3_log(motion))), prior);
     const auto reference = std::find_if(references_.begin(), references_.end(),
                                         [&](const Reference& r) { return r.keyframe == record.reference; });
     FrameRecord again = record;
@@ -202,7 +233,8 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
   const Eigen::Isometry3d T_world_reference = keyframe_pose(reference->keyframe);
   const Eigen::Isometry3d T_cur_ref = record.T_world_cam.inverse() * T_world_reference;
   // Found on the frame as prepared without any regions left out: the prior's pixels are judged too.
-  const std::shared_ptr<const tracking::OdometryFrame> whole = prior_used ? prepare(frame, {}) : last_prepared_;
+  const std::shared_ptr<const tracking::OdometryFrame> whole =
+      prior_used ? prepare_odometry_frame(frame, {}, config_) : last_prepared_;
   std::vector<uint8_t> labels =
       tracking::moving_regions(*reference->frame, *whole, T_cur_ref, config_.odometry, config_.moving, moving_);
   const auto moving = static_cast<std::size_t>(
@@ -210,6 +242,7 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
   if (moving == 0) {
     if (whole != last_prepared_) {  // the prior was left out for nothing: align the whole frame
       last_prepared_ = whole;
+      last_prepared_labels_.clear();
       FrameRecord again = record;
       if (align(*reference, T_world_reference, record.T_world_cam, again)) record = again;
     }
@@ -217,7 +250,7 @@ void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,
   }
   record.moving_share = static_cast<double>(moving) / static_cast<double>(labels.size());
   moving_ = std::move(labels);
-  last_prepared_ = prepare(frame, moving_);
+  prepare_last(frame, moving_);
   FrameRecord again = record;
   if (align(*reference, T_world_reference, record.T_world_cam, again)) {
     again.retried = record.retried;
@@ -290,14 +323,14 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   last_keyframe_ = record.T_world_cam;
   since_keyframe_ = 0;
   if (config_.front_end != "odometry") return;
-  references_.push_front({last_prepared_, number, angular_velocity().norm()});
+  references_.push_front(
+      {last_prepared_, number, angular_velocity().norm(), last_prepared_labels_});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
 }
 
 FrameTracker::PreparedKeyframe FrameTracker::newest_reference() const {
   if (references_.empty()) return {};
-  const Reference& r = references_.front();
-  return {r.frame, r.keyframe, r.angular_rate};
+  return references_.front();
 }
 
 tracking::OdometryConfig FrameTracker::odometry_config() const {
@@ -324,8 +357,13 @@ FrameTracker::State FrameTracker::state() const {
           {},
           {},
           {residual_scales_.begin(), residual_scales_.end()},
-          exposure_.samples()};
-  for (const Reference& r : references_) s.references.push_back(r.keyframe), s.reference_rates.push_back(r.angular_rate);
+          exposure_.samples(),
+          {},
+          moving_};
+  for (const Reference& r : references_) {
+    s.references.push_back(r.keyframe), s.reference_rates.push_back(r.angular_rate),
+        s.reference_labels.push_back(r.labels);
+  }
   return s;
 }
 
@@ -334,17 +372,30 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   if (s.last_poses.size() > 2 || s.last_times.size() != s.last_poses.size() ||
       s.references.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1 ||
       s.reference_rates.size() != s.references.size() ||
-      !std::all_of(s.reference_rates.begin(), s.reference_rates.end(), [](double r) { return r >= 0 && std::isfinite(r); }) ||
-      (odometry && s.references.empty() != s.last_poses.empty()) || (!odometry && !s.references.empty())) {
+      (!s.reference_labels.empty() && s.reference_labels.size() != s.references.size()) ||
+      !std::all_of(s.reference_rates.begin(), s.reference_rates.end(),
+                   [](double r) { return r >= 0 && std::isfinite(r); }) ||
+      (odometry && s.references.empty() != s.last_poses.empty()) ||
+      (!odometry && !s.references.empty())) {
     throw splat::Error("FrameTracker::restore: " + std::to_string(s.last_poses.size()) + " poses, " +
                        std::to_string(s.last_times.size()) + " times and " + std::to_string(s.references.size()) +
                        " references do not fit front end " + config_.front_end);
   }
+  // A checkpoint from before the moving regions were kept has no labels: none left out.
   std::deque<Reference> references;
   for (std::size_t k = 0; k < s.references.size(); ++k) {
-    references.push_back({std::make_shared<const tracking::OdometryFrame>(keyframe(s.references[k]), config_.odometry),
-                          s.references[k], s.reference_rates[k]});
+    const splat::RgbdFrame frame = keyframe(s.references[k]);
+    std::vector<uint8_t> labels =
+        s.reference_labels.empty() ? std::vector<uint8_t>{} : s.reference_labels[k];
+    if (k == 0) {  // the last frame's labels, the next frame's prior, are of the same size
+      moving_factor_ = app::moving_factor(frame.width(), config_);
+      check_labels_fit(frame, s.moving, config_);
+    }
+    references.push_back({prepare_odometry_frame(frame, labels, config_), s.references[k],
+                          s.reference_rates[k], std::move(labels)});
   }
+  if (references.empty() && !s.moving.empty())
+    throw splat::Error("FrameTracker::restore: moving labels without a reference");
   last_poses_ = s.last_poses;
   last_times_ = s.last_times;
   last_keyframe_ = s.last_keyframe;
@@ -352,7 +403,9 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   references_ = std::move(references);
   residual_scales_.assign(s.residual_scales.begin(), s.residual_scales.end());
   exposure_.restore(s.exposure_samples);
+  moving_ = s.moving;
   last_prepared_.reset();  // set by the next track() before anything reads it
+  last_prepared_labels_.clear();
 }
 
 }  // namespace app

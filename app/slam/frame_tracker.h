@@ -61,6 +61,14 @@ double residual_ratio(double scale, std::vector<double> recent);
 std::vector<uint8_t> upsample_labels(const std::vector<uint8_t>& labels, int labels_width, int factor, int width,
                                      int height);
 
+// The scale of tracking::moving_level() for frames `width` wide: the finest odometry level at
+// most SlamConfig::moving.max_width wide.
+int moving_factor(int width, const SlamConfig& config);
+// The frame prepared for odometry with moving regions `labels` (tracking::MovingLabel at
+// moving_factor(), or empty: none) ignored. Throws splat::Error if the labels do not fit the frame.
+std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
+    const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels, const SlamConfig& config);
+
 class FrameTracker {
  public:
   FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config);
@@ -85,7 +93,8 @@ class FrameTracker {
   struct PreparedKeyframe {
     std::shared_ptr<const tracking::OdometryFrame> frame;
     std::size_t keyframe = 0;
-    double angular_rate = 0;
+    double angular_rate = 0;      // rad/s when it was taken: its own motion blur
+    std::vector<uint8_t> labels;  // the moving regions left out of it (prepare_odometry_frame())
   };
   PreparedKeyframe newest_reference() const;
   tracking::OdometryConfig odometry_config() const;
@@ -111,6 +120,10 @@ class FrameTracker {
     std::vector<double> reference_rates;  // and their angular rates
     std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
     std::vector<std::array<double, 2>> exposure_samples;  // tracking::ExposureEstimate::samples()
+    // Odometry with moving regions: the labels (moving_labels()) each reference was prepared
+    // with, in the order of `references` (empty: none left out), and the last tracked frame's.
+    std::vector<std::vector<uint8_t>> reference_labels;
+    std::vector<uint8_t> moving;
   };
   State state() const;
   // Continues from `state`: `keyframe(number)` gives that keyframe's frame. Throws splat::Error
@@ -118,11 +131,7 @@ class FrameTracker {
   void restore(const State& state, const std::function<splat::RgbdFrame(std::size_t number)>& keyframe);
 
  private:
-  struct Reference {
-    std::shared_ptr<const tracking::OdometryFrame> frame;
-    std::size_t keyframe;
-    double angular_rate = 0;  // rad/s when it was taken: its own motion blur
-  };
+  using Reference = PreparedKeyframe;
   // The constant-velocity guess for a frame at `timestamp`.
   Eigen::Isometry3d predict(double timestamp) const;
   // The camera's motion over `seconds` at the velocity of the last two tracked poses,
@@ -144,9 +153,8 @@ class FrameTracker {
   // last_prepared_ left out the previous frame's regions.
   void leave_out_moving(const splat::RgbdFrame& frame, const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose,
                         bool prior_used, FrameRecord& record);
-  // The frame prepared for odometry with `labels` (at moving_factor()) ignored.
-  std::shared_ptr<const tracking::OdometryFrame> prepare(const splat::RgbdFrame& frame,
-                                                         const std::vector<uint8_t>& labels) const;
+  // last_prepared_ becomes `frame` prepared with `labels`, which it remembers.
+  void prepare_last(const splat::RgbdFrame& frame, std::vector<uint8_t> labels);
   void track_render(const splat::GaussiansView& map, const splat::RgbdFrame& frame, FrameRecord& record);
 
   splat::Rasterizer& rasterizer_;
@@ -159,6 +167,7 @@ class FrameTracker {
   // and the recent references, newest first: a frame lost against the newest is retried against
   // the others.
   std::shared_ptr<const tracking::OdometryFrame> last_prepared_;
+  std::vector<uint8_t> last_prepared_labels_;  // the labels last_prepared_ left out
   std::deque<Reference> references_;
   std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight

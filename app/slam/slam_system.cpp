@@ -167,13 +167,18 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
 }
 
 mapping::Vignetting SlamSystem::vignetting() const {
-  std::lock_guard lock(mutex_);
-  return mapper_.vignetting();
+  return mapper_.vignetting();  // mutex_ does not guard the mapper: see the declaration
 }
 
 void SlamSystem::rethrow_mapping_error() {
   std::lock_guard lock(mutex_);
   if (error_) std::rethrow_exception(error_);
+}
+
+void SlamSystem::with_tracking_reference(KeyframeJob& job) const {
+  if (config_.front_end != "odometry") return;
+  job.prepared = tracker_.newest_reference();
+  job.odometry = tracker_.odometry_config();
 }
 
 double SlamSystem::map_keyframe(const KeyframeJob& job) {
@@ -325,10 +330,7 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
     }
   }
   if (job && job->keyframe > 0) tracker_.keyframe_added(record, job->keyframe);
-  if (job && config_.front_end == "odometry") {
-    job->prepared = tracker_.newest_reference();
-    job->odometry = tracker_.odometry_config();
-  }
+  if (job) with_tracking_reference(*job);
   if (threaded_ && !thread_.joinable()) thread_ = std::thread([this] { mapping_loop(); });
   // The render front end tracks against the map: the first keyframe seeds it before anything
   // is tracked. The odometry needs no map, so threaded it maps even the first in the background.
@@ -432,10 +434,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
       inconsistent("the unpublished keyframe " + std::to_string(u.keyframe) + " is not the newest one mapped");
     }
     KeyframeJob job{mapped_keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}};
-    if (config_.front_end == "odometry") {
-      job.prepared = tracker_.newest_reference();
-      job.odometry = tracker_.odometry_config();
-    }
+    with_tracking_reference(job);
     unpublished = std::make_unique<InFlight>(InFlight{std::move(job), {}, std::make_pair(u.stats, u.optimize_ms)});
   }
   mapper_.restore(std::move(s.mapper), [&](std::size_t number) {

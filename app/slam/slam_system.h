@@ -102,7 +102,8 @@ class SlamSystem {
   // Whether keyframes are optimized while the next frames are tracked (SlamConfig::overlap_mapping).
   bool mapping_overlapped() const { return overlapped_; }
   std::vector<LoopEvent> loop_events() const;
-  // The camera's vignetting as the final refinement estimated it (none before).
+  // The camera's vignetting as the final refinement estimated it (none before). Only the sweep
+  // changes it, on refine_map()'s thread: call it on that thread.
   mapping::Vignetting vignetting() const;
 
   // The frames refine_map() visits, by frame index: the keyframes, or every tracked frame with
@@ -181,6 +182,8 @@ class SlamSystem {
     FrameTracker::PreparedKeyframe prepared;
     tracking::OdometryConfig odometry;
   };
+  // Odometry: gives the job tracking's newest reference (the job's keyframe) and its settings.
+  void with_tracking_reference(KeyframeJob& job) const;
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
   // The two halves of map_keyframe: the mapper's optimization (the mapping thread's, or the

@@ -1,14 +1,16 @@
 // Checkpoints: a run stopped, written to a checkpoint, read back and continued ends exactly as
 // the run that never stopped; hostile checkpoint files get one-line errors.
+#include "io/run_checkpoint.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <memory>
 
-#include <gtest/gtest.h>
-
 #include "datasets/dataset.h"
 #include "datasets/synthetic_sequence.h"
-#include "io/run_checkpoint.h"
 #include "slam/slam_system.h"
 #include "splat/vulkan_rasterizer.h"
 #include "support/backends.h"
@@ -39,6 +41,9 @@ struct RunResult {
   std::vector<Eigen::Isometry3d> trajectory;
   splat::Gaussians map;
   bool overlapped = false;  // SlamSystem::mapping_overlapped()
+  std::size_t frames_moving = 0;  // frames with moving objects left out of mapping
+  std::size_t labels_carried =
+      0;  // moving-region label sets the checkpoint carried (none: not stopped)
 };
 
 using MakeRasterizer = std::function<std::unique_ptr<splat::Rasterizer>()>;
@@ -54,8 +59,14 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
   auto first_rasterizer = make_rasterizer(), second_rasterizer = make_rasterizer();
   auto slam = std::make_unique<app::SlamSystem>(*first_rasterizer, config);
   for (std::size_t i = 0; i < stop; ++i) slam->process(load(i));
+  std::size_t labels_carried = 0;
   if (stop < dataset.entries.size()) {
     const app::SlamSystem::State state = slam->state();
+    labels_carried = !state.tracker.moving.empty();
+    for (const auto& sets : {state.tracker.reference_labels, state.back_end.covisible_labels}) {
+      labels_carried += static_cast<std::size_t>(
+          std::count_if(sets.begin(), sets.end(), [](const auto& l) { return !l.empty(); }));
+    }
     // Overlapped, the newest keyframe is still being optimized: the checkpoint carries it.
     EXPECT_EQ(state.unpublished.has_value(), slam->mapping_overlapped()) << "stopped at " << stop;
     app::write_run_checkpoint(file, {state, {{"note", "test"}}});
@@ -66,22 +77,32 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
     for (std::size_t i = stop; i < dataset.entries.size(); ++i) slam->process(load(i));
   }
   std::size_t moved = 0;  // frames whose depth was moved to its colour's instant
-  for (const auto& f : slam->state().frames) moved += !f.T_colour_depth.isApprox(Eigen::Isometry3d::Identity());
+  std::size_t frames_moving = 0;
+  for (const auto& f : slam->state().frames) {
+    moved += !f.T_colour_depth.isApprox(Eigen::Isometry3d::Identity());
+    frames_moving += !f.moving.empty();
+  }
   EXPECT_GT(moved, 3u);
   const bool overlapped = slam->mapping_overlapped();
   slam->refine_map(load);
   EXPECT_GT(slam->mapping_totals().covisible_edges, 0u);
-  return {slam->trajectory(), *slam->map(), overlapped};
+  return {slam->trajectory(), *slam->map(), overlapped, frames_moving, labels_carried};
 }
 
-// Stopped at each of `stops`, the run ends bit for bit as the one that never stopped. Returns
-// whether mapping overlapped tracking.
-bool expect_continued_runs_end_as_the_straight_one(const app::Dataset& dataset, const std::vector<std::size_t>& stops,
-                                                   const std::filesystem::path& file,
-                                                   const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
-  const RunResult straight = run(dataset, dataset.entries.size(), {}, make_rasterizer);
+struct Runs {
+  RunResult straight;
+  std::vector<RunResult> continued;  // one per stop
+};
+
+// Stopped at each of `stops`, the run ends bit for bit as the one that never stopped.
+Runs expect_continued_runs_end_as_the_straight_one(
+    const app::Dataset& dataset, const std::vector<std::size_t>& stops,
+    const std::filesystem::path& file, const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
+  Runs runs{run(dataset, dataset.entries.size(), {}, make_rasterizer), {}};
+  const RunResult& straight = runs.straight;
   for (std::size_t stop : stops) {
-    const RunResult resumed = run(dataset, stop, file, make_rasterizer);
+    const RunResult& resumed =
+        runs.continued.emplace_back(run(dataset, stop, file, make_rasterizer));
     if (resumed.trajectory.size() != straight.trajectory.size()) {
       ADD_FAILURE() << "stopped at " << stop << ": " << resumed.trajectory.size() << " poses, " << straight.trajectory.size() << " straight";
       continue;
@@ -95,7 +116,7 @@ bool expect_continued_runs_end_as_the_straight_one(const app::Dataset& dataset, 
     EXPECT_EQ(resumed.map.sh, straight.map.sh) << "stopped at " << stop;
     EXPECT_EQ(resumed.map.opacity_logits, straight.map.opacity_logits) << "stopped at " << stop;
   }
-  return straight.overlapped;
+  return runs;
 }
 
 TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
@@ -105,7 +126,26 @@ TEST(RunCheckpoint, ContinuedRunEndsExactlyAsTheRunThatNeverStopped) {
   o.shake_peak_rate = 1.0;
   o.depth_lag = 0.012;  // depth moved to the colour's instant: the checkpoint carries how
   const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
-  EXPECT_FALSE(expect_continued_runs_end_as_the_straight_one(dataset, {1u, 6u, 11u}, dir / "checkpoint.bin"));
+  EXPECT_FALSE(
+      expect_continued_runs_end_as_the_straight_one(dataset, {1u, 6u, 11u}, dir / "checkpoint.bin")
+          .straight.overlapped);
+}
+
+// A person walking through the view: tracking leaves the regions it found moving out of the
+// next frame's first alignment and out of its reference keyframes, and the checkpoint carries
+// both, so that a continued run finds and leaves out the same regions.
+TEST(RunCheckpoint, RunWithMovingObjectsContinuesExactlyAsTheRunThatNeverStopped) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 60;  // the person walks in from 0.3 s
+  o.width = 160, o.height = 120, o.focal = 130;
+  o.movers = true;
+  o.depth_lag = 0.012;
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  const Runs runs =
+      expect_continued_runs_end_as_the_straight_one(dataset, {40u, 50u}, dir / "checkpoint.bin");
+  EXPECT_GE(runs.straight.frames_moving, 10u);
+  for (const RunResult& continued : runs.continued) EXPECT_GE(continued.labels_carried, 2u);
 }
 
 // Mapping on the device overlaps tracking: a checkpoint taken while a keyframe is optimized
@@ -126,7 +166,9 @@ TEST(RunCheckpoint, OverlappedDeviceMappingContinuesExactlyAsTheRunThatNeverStop
     options.float_atomics = false;
     return splat::make_vulkan_rasterizer(options);
   };
-  EXPECT_TRUE(expect_continued_runs_end_as_the_straight_one(dataset, {3u}, dir / "checkpoint.bin", portable));
+  EXPECT_TRUE(
+      expect_continued_runs_end_as_the_straight_one(dataset, {3u}, dir / "checkpoint.bin", portable)
+          .straight.overlapped);
 }
 
 TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
@@ -180,6 +222,32 @@ TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   app::write_run_checkpoint(dir / "overrun.bin", {state, {}});
   GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "overrun.bin"), "overrun.bin",
                      "frame 1's moving mask: runs cover 13 pixels, the mask has 12");
+  // Tracking's moving labels (the last frame's, its references' and covisibility's) read back
+  // exactly; a value that is no label is refused, and labels of another size by the system.
+  state = slam.state();
+  ASSERT_FALSE(state.tracker.references.empty());
+  state.tracker.moving = {0, 0, 1, 1, 1, 3, 0};
+  state.tracker.reference_labels.assign(state.tracker.references.size(), {});
+  state.tracker.reference_labels[0] = {2, 2, 0};
+  app::write_run_checkpoint(dir / "labels.bin", {state, {}});
+  const app::SlamSystem::State labels_back = app::read_run_checkpoint(dir / "labels.bin").slam;
+  EXPECT_EQ(labels_back.tracker.moving, state.tracker.moving);
+  EXPECT_EQ(labels_back.tracker.reference_labels, state.tracker.reference_labels);
+  EXPECT_EQ(labels_back.back_end.covisible_labels, state.back_end.covisible_labels);
+  app::SlamSystem wrong_size(*rasterizer, checkpoint_config());
+  GSLAM_EXPECT_ERROR(
+      wrong_size.restore(labels_back, [&](std::size_t i) { return dataset.load(i); }),
+      "7 moving labels do not fit a frame of");
+  state.tracker.moving = {0, 9};
+  app::write_run_checkpoint(dir / "label.bin", {state, {}});
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "label.bin"), "label.bin",
+                     "the last frame's moving labels", "not a label");
+  // A run of a few bytes claiming more pixels than any checkpoint holds is refused before it is
+  // allocated.
+  state.tracker.moving.assign((16u << 20) + 1, 0);
+  app::write_run_checkpoint(dir / "label_run.bin", {state, {}});
+  GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "label_run.bin"), "label_run.bin",
+                     "more than the 16777216 label pixels");
   // A state that reads but does not hold together is refused by the system, not followed.
   app::RunCheckpoint c = app::read_run_checkpoint(good);
   c.slam.keyframe_world.pop_back();
