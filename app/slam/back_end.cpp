@@ -213,20 +213,15 @@ void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::siz
   for (const tracking::PoseGraphEdge& e : s.edges) {
     if (e.i >= keyframes || e.j >= keyframes) inconsistent("a pose graph edge names a keyframe that does not exist");
   }
-  if (s.covisible_rates.size() != s.covisible.size() ||
-      (!s.covisible_labels.empty() && s.covisible_labels.size() != s.covisible.size()) ||
-      s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
-    inconsistent(std::to_string(s.covisible.size()) + " covisible keyframes with " + std::to_string(s.covisible_rates.size()) +
-                 " rates");
+  if (s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
+    inconsistent(std::to_string(s.covisible.size()) +
+                 " covisible keyframes, more than covisible_keyframes " +
+                 std::to_string(config_.loop_closure.covisible_keyframes) + " + 1");
   }
-  for (std::size_t k = 0; k < s.covisible.size(); ++k) {
-    // Prepared as tracking prepared it, its moving regions left out (none in a checkpoint from
-    // before they were kept).
-    std::vector<uint8_t> labels =
-        s.covisible_labels.empty() ? std::vector<uint8_t>{} : std::move(s.covisible_labels[k]);
-    covisible_.push_back({prepare_odometry_frame(keyframe(s.covisible[k]), labels, config_),
-                          s.covisible[k], s.covisible_rates[k], std::move(labels)});
-  }
+  // Prepared as tracking prepared them, their moving regions left out.
+  covisible_ =
+      restore_prepared_keyframes(s.covisible, s.covisible_rates, s.covisible_labels, keyframe,
+                                 config_, "SlamSystem::restore: covisibility's keyframes");
   {
     std::lock_guard lock(places_mutex_);
     for (std::size_t k : mapped) {

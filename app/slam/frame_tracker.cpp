@@ -37,17 +37,17 @@ int moving_factor(int width, const SlamConfig& config) {
 
 namespace {
 
-// Throws splat::Error unless `labels` are empty or of the moving regions' size for `frame`.
-void check_labels_fit(const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels,
-                      const SlamConfig& config) {
-  const int factor = moving_factor(frame.width(), config);
+// Throws splat::Error, naming `what`, unless `labels` are empty or of the moving regions' size
+// (scale `factor`) for `frame`.
+void check_labels_fit(const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels, int factor,
+                      const std::string& what) {
   const int labels_width = frame.width() / factor, labels_height = frame.height() / factor;
   if (!labels.empty() && labels.size() != static_cast<std::size_t>(labels_width) *
                                               static_cast<std::size_t>(labels_height)) {
-    throw splat::Error(std::to_string(labels.size()) + " moving labels do not fit a frame of " +
-                       std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + " (" +
-                       std::to_string(labels_width) + "x" + std::to_string(labels_height) +
-                       " labels)");
+    throw splat::Error(what + ": " + std::to_string(labels.size()) +
+                       " moving labels do not fit a frame of " + std::to_string(frame.width()) +
+                       "x" + std::to_string(frame.height()) + " (" + std::to_string(labels_width) +
+                       "x" + std::to_string(labels_height) + " labels)");
   }
 }
 
@@ -57,8 +57,8 @@ std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
     const splat::RgbdFrame& frame, const std::vector<uint8_t>& labels, const SlamConfig& config) {
   if (labels.empty())
     return std::make_shared<const tracking::OdometryFrame>(frame, config.odometry);
-  check_labels_fit(frame, labels, config);
   const int factor = moving_factor(frame.width(), config);
+  check_labels_fit(frame, labels, factor, "prepare_odometry_frame");
   splat::RgbdFrame masked = frame;
   const std::vector<uint8_t> spread =
       upsample_labels(labels, frame.width() / factor, factor, frame.width(), frame.height());
@@ -72,6 +72,28 @@ std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
     masked.ignore[i] = std::max(masked.ignore[i], why);
   }
   return std::make_shared<const tracking::OdometryFrame>(masked, config.odometry);
+}
+
+std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
+    const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
+    const std::vector<std::vector<uint8_t>>& labels,
+    const std::function<splat::RgbdFrame(std::size_t)>& keyframe, const SlamConfig& config,
+    const std::string& what) {
+  if (rates.size() != numbers.size() || (!labels.empty() && labels.size() != numbers.size())) {
+    throw splat::Error(what + ": " + std::to_string(numbers.size()) + " keyframes with " +
+                       std::to_string(rates.size()) + " angular rates and " +
+                       std::to_string(labels.size()) + " label sets");
+  }
+  std::deque<FrameTracker::PreparedKeyframe> prepared;
+  for (std::size_t k = 0; k < numbers.size(); ++k) {
+    const splat::RgbdFrame frame = keyframe(numbers[k]);
+    std::vector<uint8_t> left_out = labels.empty() ? std::vector<uint8_t>{} : labels[k];
+    check_labels_fit(frame, left_out, moving_factor(frame.width(), config),
+                     what + ", keyframe " + std::to_string(numbers[k]));
+    prepared.push_back({prepare_odometry_frame(frame, left_out, config), numbers[k], rates[k],
+                        std::move(left_out)});
+  }
+  return prepared;
 }
 
 double residual_ratio(double scale, std::vector<double> recent) {
@@ -92,8 +114,7 @@ void FrameTracker::start(const splat::RgbdFrame& frame) {
   since_keyframe_ = 0;
   references_.clear();
   if (config_.front_end == "odometry") {
-    references_.push_front(
-        {std::make_shared<const tracking::OdometryFrame>(frame, config_.odometry), 0, 0, {}});
+    references_.push_front({prepare_odometry_frame(frame, {}, config_), 0, 0, {}});
   }
 }
 
@@ -361,8 +382,9 @@ FrameTracker::State FrameTracker::state() const {
           {},
           moving_};
   for (const Reference& r : references_) {
-    s.references.push_back(r.keyframe), s.reference_rates.push_back(r.angular_rate),
-        s.reference_labels.push_back(r.labels);
+    s.references.push_back(r.keyframe);
+    s.reference_rates.push_back(r.angular_rate);
+    s.reference_labels.push_back(r.labels);
   }
   return s;
 }
@@ -371,8 +393,6 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   const bool odometry = config_.front_end == "odometry";
   if (s.last_poses.size() > 2 || s.last_times.size() != s.last_poses.size() ||
       s.references.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1 ||
-      s.reference_rates.size() != s.references.size() ||
-      (!s.reference_labels.empty() && s.reference_labels.size() != s.references.size()) ||
       !std::all_of(s.reference_rates.begin(), s.reference_rates.end(),
                    [](double r) { return r >= 0 && std::isfinite(r); }) ||
       (odometry && s.references.empty() != s.last_poses.empty()) ||
@@ -381,21 +401,17 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
                        std::to_string(s.last_times.size()) + " times and " + std::to_string(s.references.size()) +
                        " references do not fit front end " + config_.front_end);
   }
-  // A checkpoint from before the moving regions were kept has no labels: none left out.
-  std::deque<Reference> references;
-  for (std::size_t k = 0; k < s.references.size(); ++k) {
-    const splat::RgbdFrame frame = keyframe(s.references[k]);
-    std::vector<uint8_t> labels =
-        s.reference_labels.empty() ? std::vector<uint8_t>{} : s.reference_labels[k];
-    if (k == 0) {  // the last frame's labels, the next frame's prior, are of the same size
-      moving_factor_ = app::moving_factor(frame.width(), config_);
-      check_labels_fit(frame, s.moving, config_);
-    }
-    references.push_back({prepare_odometry_frame(frame, labels, config_), s.references[k],
-                          s.reference_rates[k], std::move(labels)});
+  std::deque<Reference> references =
+      restore_prepared_keyframes(s.references, s.reference_rates, s.reference_labels, keyframe,
+                                 config_, "tracking's references");
+  // The last frame's labels (the next frame's prior) are at the references' scale.
+  if (!s.moving.empty()) {
+    if (references.empty())
+      throw splat::Error("FrameTracker::restore: moving labels without a reference");
+    const splat::RgbdFrame frame = keyframe(references.front().keyframe);
+    check_labels_fit(frame, s.moving, app::moving_factor(frame.width(), config_),
+                     "the last frame's moving labels");
   }
-  if (references.empty() && !s.moving.empty())
-    throw splat::Error("FrameTracker::restore: moving labels without a reference");
   last_poses_ = s.last_poses;
   last_times_ = s.last_times;
   last_keyframe_ = s.last_keyframe;

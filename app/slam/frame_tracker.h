@@ -120,8 +120,9 @@ class FrameTracker {
     std::vector<double> reference_rates;  // and their angular rates
     std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
     std::vector<std::array<double, 2>> exposure_samples;  // tracking::ExposureEstimate::samples()
-    // Odometry with moving regions: the labels (moving_labels()) each reference was prepared
-    // with, in the order of `references` (empty: none left out), and the last tracked frame's.
+    // Odometry with moving regions: the labels each reference was prepared with (its own
+    // moving_labels(), or the prior of a frame tracking lost and relocalized), in the order of
+    // `references` (an empty set: none left out), and the last tracked frame's moving_labels().
     std::vector<std::vector<uint8_t>> reference_labels;
     std::vector<uint8_t> moving;
   };
@@ -175,5 +176,15 @@ class FrameTracker {
   std::optional<splat::RgbdFrame> moved_;  // depth_moved_frame()
   int moving_factor_ = 1;
 };
+
+// Keyframes as tracking prepared them, restored from a checkpoint: keyframe numbers[k], taken at
+// angular rate rates[k], with labels[k] left out (`labels` empty: a checkpoint from before they
+// were kept, none left out). Throws splat::Error naming `what` on lists of different lengths or
+// labels that do not fit their keyframe.
+std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
+    const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
+    const std::vector<std::vector<uint8_t>>& labels,
+    const std::function<splat::RgbdFrame(std::size_t)>& keyframe, const SlamConfig& config,
+    const std::string& what);
 
 }  // namespace app

@@ -29,6 +29,11 @@ std::size_t moving_level(const OdometryFrame& frame, const MovingConfig& config)
 }
 
 std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, int height, int pixels) {
+  if (width < 0 || height < 0 ||
+      labels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+    throw splat::Error("grow_regions: " + std::to_string(labels.size()) + " labels for " +
+                       std::to_string(width) + "x" + std::to_string(height));
+  }
   std::vector<uint8_t> out(labels.begin(), labels.end());
   if (pixels <= 0) return out;
   cv::Mat any(height, width, CV_8U);

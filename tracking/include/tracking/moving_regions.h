@@ -60,7 +60,8 @@ std::vector<uint8_t> moving_regions(const OdometryFrame& reference, const Odomet
                                     const Eigen::Isometry3d& T_cur_ref, const OdometryConfig& odometry,
                                     const MovingConfig& config, std::span<const uint8_t> previous = {});
 
-// `labels` grown by `pixels` (kOutline where they spread; a pixel keeps its own label).
+// `labels` (width x height) grown by `pixels` (kOutline where they spread; a pixel keeps its own
+// label). Throws splat::Error if there are not width x height labels.
 std::vector<uint8_t> grow_regions(std::span<const uint8_t> labels, int width, int height, int pixels);
 
 }  // namespace tracking
