@@ -63,15 +63,15 @@ std::vector<uint8_t> labels_from_json(const json& j, const std::string& what,
   if (!j.is_array()) throw splat::Error(what + ": not a list of [label, length] runs");
   for (std::size_t r = 0; r < j.size(); ++r) {
     const json& run = j[r];
-    const std::string where = what + ": run " + std::to_string(r) + " " + run.dump().substr(0, 40);
+    auto where = [&] { return what + ": run " + std::to_string(r) + " " + run.dump().substr(0, 40); };
     if (!run.is_array() || run.size() != 2 || !run[0].is_number_unsigned() ||
         !run[1].is_number_unsigned() || run[0].get<std::uint64_t>() > tracking::kOutline) {
-      throw splat::Error(where + " is not a label (0-" + std::to_string(int(tracking::kOutline)) +
+      throw splat::Error(where() + " is not a label (0-" + std::to_string(int(tracking::kOutline)) +
                          ") and a length");
     }
     const std::uint64_t length = run[1].get<std::uint64_t>();
     if (length > pixels_left) {
-      throw splat::Error(where + " reaches past the " + std::to_string(kMaxLabelPixels) +
+      throw splat::Error(where() + " reaches past the " + std::to_string(kMaxLabelPixels) +
                          " label pixels a checkpoint holds");
     }
     pixels_left -= length;
