@@ -306,6 +306,11 @@ int run_cli(int argc, char** argv) {
   gen_cmd->add_option("--depth-lag", seq.depth_lag,
                       "Depth taken up to this many seconds before or after its colour image (unsynchronized cameras)")
       ->check(CLI::Range(0.0, 0.1));
+  gen_cmd
+      ->add_option("--gain-swing", seq.gain_swing,
+                   "Auto exposure hunting: the colour gain swings as exp(S sin(2 pi t / 3 s)), "
+                   "saturating at white")
+      ->check(CLI::Range(0.0, 2.0));
   gen_cmd->add_option("--focal-error", seq.focal_error, "intrinsics.txt's focal length off by this fraction")
       ->check(CLI::Range(-0.5, 0.5));
   gen_cmd->add_flag("--movers", seq.movers,
@@ -313,9 +318,12 @@ int run_cli(int argc, char** argv) {
   gen_cmd->add_flag("--labels", seq.labels, "Exact class ids per pixel in labels/, with labels/classes.json");
   gen_cmd->add_option("--seed", seq.seed, "Random seed (noise, holes)");
   gen_cmd->callback([gen_cmd, &gen] {
-    for (const char* flag : {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
-                             "--depth-noise", "--depth-holes", "--depth-lag", "--focal-error", "--movers", "--labels", "--seed"}) {
-      if (gen.suite && gen_cmd->count(flag) > 0) throw CLI::ValidationError(std::string(flag) + " describes one sequence; --suite writes its own");
+    for (const char* flag : {"--frames", "--width", "--height", "--laps", "--shake", "--exposure",
+                             "--blur-samples", "--depth-noise", "--depth-holes", "--depth-lag",
+                             "--gain-swing", "--focal-error", "--movers", "--labels", "--seed"}) {
+      if (gen.suite && gen_cmd->count(flag) > 0)
+        throw CLI::ValidationError(std::string(flag) +
+                                   " describes one sequence; --suite writes its own");
     }
   });
 

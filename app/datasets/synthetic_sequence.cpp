@@ -290,10 +290,14 @@ SyntheticOptions SyntheticOptions::hard_motion() {
 
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
   if (o.frames < 1 || o.width < 8 || o.height < 8) throw splat::Error("synthetic sequence: bad size or frame count");
-  if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) || !(o.depth_holes >= 0 && o.depth_holes < 1) ||
-      !(o.shake_peak_rate >= 0) || !(o.fps > 0) || !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps)) {
-    throw splat::Error("synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake and "
-                       "holes below 1, depth lag under half a frame expected");
+  if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) ||
+      !(o.depth_holes >= 0 && o.depth_holes < 1) || !(o.shake_peak_rate >= 0) || !(o.fps > 0) ||
+      !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps) ||
+      !(o.gain_swing >= 0 && o.gain_swing <= 2)) {
+    throw splat::Error(
+        "synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake "
+        "and "
+        "holes below 1, depth lag under half a frame, gain swing in [0, 2] expected");
   }
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> gauss(0, 1);
@@ -317,6 +321,8 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     }
     const std::vector<uint8_t> holes = hole_mask(o.width, o.height, o.depth_holes, rng);
     std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
+    constexpr double kGainPeriod = 3;  // seconds
+    const double gain = std::exp(o.gain_swing * std::sin(2 * M_PI * seconds / kGainPeriod));
     splat::Image16 depth(o.width, o.height, 1), labels(o.width, o.height, 1);
     // Colour, row by row on every core (no random numbers: the same image on any machine).
     pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {
@@ -332,7 +338,10 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
             if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
           }
         }
-        for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] = static_cast<float>(color[c]);
+        for (int c = 0; c < 3; ++c) {
+          rgb[(static_cast<std::size_t>(y) * o.width + x) * 3 + c] =
+              static_cast<float>(std::min(1.0, gain * color[c]));
+        }
       }
     });
     // Depth and labels at the pixel centres, mid-exposure, at the depth camera's instant: its

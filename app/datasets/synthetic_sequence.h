@@ -37,6 +37,9 @@ struct SyntheticOptions {
   // to this many seconds before or after the colour image it pairs with, the offset drifting
   // through that range, and stamped with its own time. 0: taken together.
   double depth_lag = 0;
+  // Auto exposure hunting: the colour image's gain swings as exp(gain_swing sin(2 pi t / 3 s)),
+  // its values clipped at 1 (saturated). 0: a fixed exposure.
+  double gain_swing = 0;
   // Moving objects (for the arc path): a person walking across the view, a chair pushed a metre
   // and left, a crate that appears (see Movers in the .cpp), with depth lost along their edges.
   bool movers = false;

@@ -71,6 +71,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"odometry", "blur_scale_px", &o.blur_scale_px},
       {"odometry", "exposure", &o.exposure},
       {"odometry", "estimate_exposure", &o.estimate_exposure},
+      {"odometry", "estimate_brightness", &o.estimate_brightness},
       {"odometry", "fade_per_blur_px", &o.fade_per_blur_px},
       {"odometry", "exposure_window", &o.exposure_window},
       {"odometry", "min_depth", &o.min_depth},

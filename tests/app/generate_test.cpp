@@ -53,8 +53,8 @@ TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
 TEST(SyntheticSuite, CoversTheHardCases) {
   const std::vector<app::SyntheticCase> suite = app::hard_case_suite();
   std::set<std::string> names;
-  bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false, long_one = false, moving = false,
-       unsynced = false;
+  bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
+       long_one = false, moving = false, unsynced = false, exposure = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -65,8 +65,10 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     long_one |= c.options.frames >= 700;
     moving |= c.options.movers && !c.options.labels;  // found without a model, not from labels
     unsynced |= c.options.depth_lag > 0;
+    exposure |= c.options.gain_swing > 0;
   }
-  EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && unsynced);
+  EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && unsynced &&
+              exposure);
 }
 
 }  // namespace

@@ -144,13 +144,49 @@ struct Normal {
   Vector6d b = Vector6d::Zero();
   double cost = 0;
   std::size_t seen = 0;  // points with a depth sample in the current frame
+  // Per photometric term: the reference's intensity and the current frame's where it lands.
+  std::vector<std::pair<float, float>> intensities;
 };
+
+// I_cur = gain I_ref: the colour camera's exposure and gain changing between frames.
+struct Brightness {
+  float gain = 1;
+};
+
+// The brightness change that maps the reference's intensities onto the current frame's: the
+// ratio of their sums, weighted by the t-distribution (outliers: occlusions, highlights, moving
+// objects), a few rounds. A ratio of means, not a regression: the small misalignments of a pose
+// not yet converged scatter both sides alike and leave it unbiased, where a fitted slope
+// shrinks towards zero (and a fitted offset takes the rest).
+Brightness fit_brightness(const std::vector<std::pair<float, float>>& pairs, double dof,
+                          Brightness start) {
+  if (pairs.size() < 16) return start;
+  Brightness fit = start;
+  std::vector<float> squares(pairs.size());
+  for (int round = 0; round < 3; ++round) {
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const float r = pairs[k].second - fit.gain * pairs[k].first;
+      squares[k] = r * r;
+    }
+    const double inv_var = 1 / std::pow(t_scale(squares, dof), 2);
+    double current = 0, reference = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const double w = (dof + 1) / (dof + squares[k] * inv_var);
+      current += w * pairs[k].second;
+      reference += w * pairs[k].first;
+    }
+    if (!(reference > 0) || !std::isfinite(current / reference)) return start;
+    fit.gain = static_cast<float>(std::clamp(current / reference, 0.5, 2.0));
+  }
+  return fit;
+}
 
 // One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
 // t-distribution scales are estimated from these residuals first; otherwise the given ones are
 // used, so that costs at two poses compare. The cost is the mean robust cost per term.
-Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur, const Eigen::Isometry3d& T,
-                 const OdometryConfig& c, double& intensity_scale, double& depth_scale, bool estimate) {
+Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur,
+                 const Eigen::Isometry3d& T, const OdometryConfig& c, const Brightness& brightness,
+                 double& intensity_scale, double& depth_scale, bool estimate) {
   const Eigen::Matrix3f r = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const float fx = static_cast<float>(cur.fx), fy = static_cast<float>(cur.fy);
@@ -164,6 +200,7 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
   photometric.reserve(n);
   geometric.reserve(n);
   Normal out;
+  if (c.estimate_brightness) out.intensities.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector3f p = r * ref.positions[k] + t;
     if (!(p.z() > static_cast<float>(c.min_depth))) continue;
@@ -186,8 +223,10 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
       j.tail<3>() = p.cross(g);
       return j;
     };
-    const float r_intensity = s.intensity - ref.intensity[ref.points[k]];
+    const float reference_intensity = ref.intensity[ref.points[k]];
+    const float r_intensity = s.intensity - brightness.gain * reference_intensity;
     photometric.push_back({chain(s.gx, s.gy, 0.f), r_intensity});
+    if (c.estimate_brightness) out.intensities.emplace_back(reference_intensity, s.intensity);
     if (s.depth > 0) {
       ++out.seen;
       const float noise = static_cast<float>(c.depth_noise) * p.z() * p.z();
@@ -302,12 +341,18 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
   }
   OdometryResult result;
   Eigen::Isometry3d T = initial_T_cur_ref;
+  Brightness brightness;
   for (std::size_t level = 0; level < levels; ++level) {
     const OdometryFrame::Level& ref = reference.levels()[level];
     const OdometryFrame::Level& cur = current.levels()[level];
     const bool finest = level + 1 == levels;
     double intensity_scale = 0, depth_scale = 0;
-    Normal normal = linearize(ref, cur, T, config, intensity_scale, depth_scale, true);
+    Normal normal = linearize(ref, cur, T, config, brightness, intensity_scale, depth_scale, true);
+    if (config.estimate_brightness &&
+        level == 0) {  // the finer levels start from the last level's fit
+      brightness = fit_brightness(normal.intensities, config.t_dof, brightness);
+      normal = linearize(ref, cur, T, config, brightness, intensity_scale, depth_scale, true);
+    }
     double lambda = 0;  // Levenberg-Marquardt damping, raised only when a step fails
     for (int it = 0; it < config.iterations[level]; ++it) {
       Matrix6d h = normal.h;
@@ -315,7 +360,8 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
       const Vector6d delta = h.ldlt().solve(-normal.b);
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * T);
-      const Normal next = linearize(ref, cur, candidate, config, intensity_scale, depth_scale, false);
+      const Normal next =
+          linearize(ref, cur, candidate, config, brightness, intensity_scale, depth_scale, false);
       ++result.iterations;
       if (next.cost <= normal.cost) {
         T = candidate;
@@ -328,11 +374,16 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
         lambda = lambda == 0 ? 1e-3 : lambda * 10;
       }
     }
+    // Refitted where the level ends, at its pose, for the next level (held through each level's
+    // steps, so that the costs of two poses compare).
+    if (config.estimate_brightness)
+      brightness = fit_brightness(normal.intensities, config.t_dof, brightness);
     if (finest) {
       result.information = normal.h;
       result.overlap = ref.points.empty() ? 0 : static_cast<double>(normal.seen) / static_cast<double>(ref.points.size());
       result.intensity_scale = intensity_scale;
       result.depth_scale = depth_scale;
+      result.gain = brightness.gain;
     }
   }
   result.T_cur_ref = T;
