@@ -278,6 +278,11 @@ bool swept_by_movers(const Eigen::Vector3d& p, double margin) {
          inside(Vector3d(0.92, 0.6, 0.08), Vector3d(1.3, 1.5, 0.52));
 }
 
+double colour_gain(const SyntheticOptions& o, double seconds) {
+  constexpr double kPeriod = 3;  // seconds: an auto exposure hunting slowly
+  return std::exp(o.gain_swing * std::sin(2 * M_PI * seconds / kPeriod));
+}
+
 SyntheticOptions SyntheticOptions::hard_motion() {
   SyntheticOptions o;
   o.shake_peak_rate = 2.2;
@@ -321,8 +326,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     }
     const std::vector<uint8_t> holes = hole_mask(o.width, o.height, o.depth_holes, rng);
     std::vector<float> rgb(static_cast<std::size_t>(o.width) * o.height * 3, 0.f);
-    constexpr double kGainPeriod = 3;  // seconds
-    const double gain = std::exp(o.gain_swing * std::sin(2 * M_PI * seconds / kGainPeriod));
+    const double gain = colour_gain(o, seconds);
     splat::Image16 depth(o.width, o.height, 1), labels(o.width, o.height, 1);
     // Colour, row by row on every core (no random numbers: the same image on any machine).
     pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {

@@ -51,6 +51,9 @@ struct SyntheticOptions {
   static SyntheticOptions hard_motion();
 };
 
+// The colour image's gain at this time from the sequence's start (gain_swing).
+double colour_gain(const SyntheticOptions& options, double seconds);
+
 // Writes a synthetic RGB-D sequence in TUM layout (rgb/, depth/ as 16-bit PNG / 5000,
 // rgb.txt, depth.txt, groundtruth.txt and intrinsics.txt) with exact ground truth (and labels). The images
 // come from a ray caster of a textured room with spheres and boxes, independent of the splat

@@ -1,11 +1,11 @@
 #include "tracking/rgbd_odometry.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "splat/error.h"
 #include "splat/field_check.h"
@@ -148,24 +148,19 @@ struct Normal {
   std::vector<std::pair<float, float>> intensities;
 };
 
-// I_cur = gain I_ref: the colour camera's exposure and gain changing between frames.
-struct Brightness {
-  float gain = 1;
-};
-
-// The brightness change that maps the reference's intensities onto the current frame's: the
-// ratio of their sums, weighted by the t-distribution (outliers: occlusions, highlights, moving
-// objects), a few rounds. A ratio of means, not a regression: the small misalignments of a pose
-// not yet converged scatter both sides alike and leave it unbiased, where a fitted slope
-// shrinks towards zero (and a fitted offset takes the rest).
-Brightness fit_brightness(const std::vector<std::pair<float, float>>& pairs, double dof,
-                          Brightness start) {
+// The colour camera's gain between the frames, I_cur = gain I_ref (exposure and gain changing
+// between frames): the ratio of the intensities' sums, weighted by the t-distribution
+// (outliers: occlusions, highlights, moving objects), a few rounds. A ratio of means, not a
+// regression: the small misalignments of a pose not yet converged scatter both sides alike and
+// leave it unbiased, where a fitted slope shrinks towards zero (and a fitted offset takes the
+// rest). Under 16 pairs there is nothing to tell, and the gain stays `start`.
+float fit_gain(const std::vector<std::pair<float, float>>& pairs, double dof, float start) {
   if (pairs.size() < 16) return start;
-  Brightness fit = start;
+  float gain = start;
   std::vector<float> squares(pairs.size());
   for (int round = 0; round < 3; ++round) {
     for (std::size_t k = 0; k < pairs.size(); ++k) {
-      const float r = pairs[k].second - fit.gain * pairs[k].first;
+      const float r = pairs[k].second - gain * pairs[k].first;
       squares[k] = r * r;
     }
     const double inv_var = 1 / std::pow(t_scale(squares, dof), 2);
@@ -176,16 +171,18 @@ Brightness fit_brightness(const std::vector<std::pair<float, float>>& pairs, dou
       reference += w * pairs[k].first;
     }
     if (!(reference > 0) || !std::isfinite(current / reference)) return start;
-    fit.gain = static_cast<float>(std::clamp(current / reference, 0.5, 2.0));
+    // An exposure changes by a few tens of percent between a frame and its keyframe; a ratio
+    // past 2x either way is a wrong alignment's, not the camera's.
+    gain = static_cast<float>(std::clamp(current / reference, 0.5, 2.0));
   }
-  return fit;
+  return gain;
 }
 
 // One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
 // t-distribution scales are estimated from these residuals first; otherwise the given ones are
 // used, so that costs at two poses compare. The cost is the mean robust cost per term.
 Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur,
-                 const Eigen::Isometry3d& T, const OdometryConfig& c, const Brightness& brightness,
+                 const Eigen::Isometry3d& T, const OdometryConfig& c, float gain,
                  double& intensity_scale, double& depth_scale, bool estimate) {
   const Eigen::Matrix3f r = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
@@ -224,7 +221,7 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
       return j;
     };
     const float reference_intensity = ref.intensity[ref.points[k]];
-    const float r_intensity = s.intensity - brightness.gain * reference_intensity;
+    const float r_intensity = s.intensity - gain * reference_intensity;
     photometric.push_back({chain(s.gx, s.gy, 0.f), r_intensity});
     if (c.estimate_brightness) out.intensities.emplace_back(reference_intensity, s.intensity);
     if (s.depth > 0) {
@@ -341,17 +338,18 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
   }
   OdometryResult result;
   Eigen::Isometry3d T = initial_T_cur_ref;
-  Brightness brightness;
+  float gain = 1;
   for (std::size_t level = 0; level < levels; ++level) {
     const OdometryFrame::Level& ref = reference.levels()[level];
     const OdometryFrame::Level& cur = current.levels()[level];
     const bool finest = level + 1 == levels;
     double intensity_scale = 0, depth_scale = 0;
-    Normal normal = linearize(ref, cur, T, config, brightness, intensity_scale, depth_scale, true);
-    if (config.estimate_brightness &&
-        level == 0) {  // the finer levels start from the last level's fit
-      brightness = fit_brightness(normal.intensities, config.t_dof, brightness);
-      normal = linearize(ref, cur, T, config, brightness, intensity_scale, depth_scale, true);
+    Normal normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true);
+    // The gain is held through each level's steps, so that the costs of two poses compare: fitted
+    // here on the coarsest level, where each coarser level ends for the finer ones.
+    if (config.estimate_brightness && level == 0) {
+      gain = fit_gain(normal.intensities, config.t_dof, gain);
+      normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true);
     }
     double lambda = 0;  // Levenberg-Marquardt damping, raised only when a step fails
     for (int it = 0; it < config.iterations[level]; ++it) {
@@ -360,12 +358,12 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
       const Vector6d delta = h.ldlt().solve(-normal.b);
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * T);
-      const Normal next =
-          linearize(ref, cur, candidate, config, brightness, intensity_scale, depth_scale, false);
+      Normal next =
+          linearize(ref, cur, candidate, config, gain, intensity_scale, depth_scale, false);
       ++result.iterations;
       if (next.cost <= normal.cost) {
         T = candidate;
-        normal = next;
+        normal = std::move(next);
         lambda *= 0.25;
         if (delta.head<3>().norm() < config.min_step_translation && delta.tail<3>().norm() < config.min_step_rotation) break;
       } else if (lambda > 1e4) {
@@ -374,16 +372,14 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
         lambda = lambda == 0 ? 1e-3 : lambda * 10;
       }
     }
-    // Refitted where the level ends, at its pose, for the next level (held through each level's
-    // steps, so that the costs of two poses compare).
-    if (config.estimate_brightness)
-      brightness = fit_brightness(normal.intensities, config.t_dof, brightness);
+    if (config.estimate_brightness && !finest)
+      gain = fit_gain(normal.intensities, config.t_dof, gain);
     if (finest) {
       result.information = normal.h;
       result.overlap = ref.points.empty() ? 0 : static_cast<double>(normal.seen) / static_cast<double>(ref.points.size());
       result.intensity_scale = intensity_scale;
       result.depth_scale = depth_scale;
-      result.gain = brightness.gain;
+      result.gain = gain;
     }
   }
   result.T_cur_ref = T;

@@ -44,7 +44,7 @@ struct OdometryConfig {
   int exposure_window = 150;
   // The colour camera's exposure and gain change between frames (auto exposure): the
   // photometric residual compares the current frame with gain x reference, the gain fitted
-  // robustly where the coarsest level starts and again where each level ends.
+  // robustly where the coarsest level starts and again where each coarser level ends.
   bool estimate_brightness = true;
   double min_depth = 0.1, max_depth = 8.0;  // metres: measurements outside are ignored
   // Reference points are taken away from depth edges (depth changing by more than this fraction
@@ -99,7 +99,8 @@ struct OdometryResult {
   // T_cur_ref, translation first), in the robust weighted residuals' units.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   double intensity_scale = 0, depth_scale = 0;  // the t-distribution scales at the end
-  double gain = 1;  // the brightness change fitted at the finest level (estimate_brightness)
+  // The colour gain I_cur / I_ref the finest level aligned with (estimate_brightness; else 1).
+  double gain = 1;
 };
 
 // The depth weight for aligning `current`, taken while the camera turned at `current_rate`
