@@ -186,7 +186,7 @@ TEST(RgbdOdometry, FitsTheColourGainOfAutoExposure) {
 // A black reference has no intensity to take a ratio of: the gain stays 1 and the pose finite.
 TEST(RgbdOdometry, BlackReferenceLeavesTheGainAtOne) {
   gslam::test::TempDir dir;
-  const app::Dataset d = synthetic(dir, 30);
+  const app::Dataset d = synthetic(dir, 2);
   splat::RgbdFrame black = d.load(0);
   std::fill(black.rgb.begin(), black.rgb.end(), 0.f);
   const tracking::OdometryConfig config;
