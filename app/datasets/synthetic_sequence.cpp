@@ -301,8 +301,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
       !(o.gain_swing >= 0 && o.gain_swing <= 2)) {
     throw splat::Error(
         "synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake "
-        "and "
-        "holes below 1, depth lag under half a frame, gain swing in [0, 2] expected");
+        "and holes below 1, depth lag under half a frame, gain swing in [0, 2] expected");
   }
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> gauss(0, 1);

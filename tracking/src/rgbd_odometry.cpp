@@ -1,11 +1,12 @@
 #include "tracking/rgbd_odometry.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <utility>
 
 #include "splat/error.h"
 #include "splat/field_check.h"
