@@ -315,12 +315,16 @@ int run_cli(int argc, char** argv) {
       ->check(CLI::Range(-0.5, 0.5));
   gen_cmd->add_flag("--movers", seq.movers,
                     "People and objects moving through the room: a person walking across, a chair pushed, a crate appearing");
+  gen_cmd->add_flag("--walkers", seq.walkers,
+                    "Two people pacing across the view for the whole sequence, one near the camera "
+                    "(TUM's fr3/walking)");
   gen_cmd->add_flag("--labels", seq.labels, "Exact class ids per pixel in labels/, with labels/classes.json");
   gen_cmd->add_option("--seed", seq.seed, "Random seed (noise, holes)");
   gen_cmd->callback([gen_cmd, &gen] {
-    for (const char* flag : {"--frames", "--width", "--height", "--laps", "--shake", "--exposure",
-                             "--blur-samples", "--depth-noise", "--depth-holes", "--depth-lag",
-                             "--gain-swing", "--focal-error", "--movers", "--labels", "--seed"}) {
+    for (const char* flag :
+         {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
+          "--depth-noise", "--depth-holes", "--depth-lag", "--gain-swing", "--focal-error",
+          "--movers", "--walkers", "--labels", "--seed"}) {
       if (gen.suite && gen_cmd->count(flag) > 0)
         throw CLI::ValidationError(std::string(flag) +
                                    " describes one sequence; --suite writes its own");

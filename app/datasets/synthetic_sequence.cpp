@@ -156,19 +156,23 @@ class Movers {
     x = out > 0 ? kStop - out : std::min(kFrom + in, kStop);
     return true;
   }
+  // A person (1.78 m, 0.44 m wide) standing at (x, z) on the floor, `walked` metres into their
+  // walk (the stride's bob), in a striped shirt of this colour and dark trousers.
+  static void person(const Vector3d& o, const Vector3d& d, double x, double z, double walked,
+                     const Vector3d& shirt, Hit& hit) {
+    const double bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
+    const Vector3d lo(x - 0.22, -0.05 + bob, z - 0.13), hi(x + 0.22, 1.5, z + 0.13);
+    if (Scene::box(o, d, lo, hi, hit, kPerson)) {
+      const double local_y = hit.point.y() - bob;
+      hit.color = local_y < 0.75 ? shirt * (0.75 + 0.25 * checker(local_y, 0, 0.08))
+                                 : Vector3d(0.12, 0.14, 0.3);
+    }
+    Scene::sphere(o, d, Vector3d(x, -0.17 + bob, z), 0.11, hit, 2);
+  }
   static void intersect(const Vector3d& o, const Vector3d& d, double seconds, Hit& hit) {
     double x = 0, walked = 0;
-    if (person_at(seconds, x, walked)) {
-      const double z = kPersonZ, bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
-      const Vector3d lo(x - 0.22, -0.05 + bob, z - 0.13), hi(x + 0.22, 1.5, z + 0.13);
-      if (Scene::box(o, d, lo, hi, hit, kPerson)) {
-        // A shirt with stripes above the waist, dark trousers below.
-        const double local_y = hit.point.y() - bob;
-        hit.color = local_y < 0.75 ? Vector3d(0.75, 0.2, 0.25) * (0.75 + 0.25 * checker(local_y, 0, 0.08))
-                                   : Vector3d(0.12, 0.14, 0.3);
-      }
-      Scene::sphere(o, d, Vector3d(x, -0.17 + bob, z), 0.11, hit, 2);
-    }
+    if (person_at(seconds, x, walked))
+      person(o, d, x, kPersonZ, walked, Vector3d(0.75, 0.2, 0.25), hit);
     // The chair: pushed from x = 1.7 to 0.7 between 1.5 and 2.5 s.
     const double push = std::clamp(seconds - 1.5, 0.0, 1.0);
     const double chair_x = 1.7 - push;
@@ -180,10 +184,30 @@ class Movers {
   }
 };
 
+// SyntheticOptions::walkers: two people pacing to and fro across the arc's view for the whole
+// sequence, as in TUM's fr3/walking sequences: one at 1.3 m/s where the movers' person walks, one
+// at 1.1 m/s in the other direction about 0.6 m from the camera, where they fill up to two thirds
+// of the image. Their torsos are flat and evenly striped along their walk, so most of each one's
+// pixels look the same from frame to frame: only their outlines give their motion away.
+struct Walkers {
+  // Pacing over `span` metres from x = `from` at `speed`, starting `start` metres into the walk.
+  static double pacing(double seconds, double from, double span, double speed, double start) {
+    const double d = std::fmod(seconds * speed + start, 2 * span);
+    return from + (d < span ? d : 2 * span - d);
+  }
+  static void intersect(const Vector3d& o, const Vector3d& d, double seconds, Hit& hit) {
+    Movers::person(o, d, pacing(seconds, -1.2, 2.2, 1.3, 0), Movers::kPersonZ, 1.3 * seconds,
+                   Vector3d(0.75, 0.2, 0.25), hit);
+    Movers::person(o, d, -pacing(seconds, -1.0, 2.2, 1.1, 1.2), -0.9, 1.1 * seconds,
+                   Vector3d(0.2, 0.6, 0.3), hit);
+  }
+};
+
 void trace(const Scene& scene, const SyntheticOptions& o, const Vector3d& origin, const Vector3d& direction,
            double seconds, Hit& hit) {
   scene.intersect(origin, direction, hit);
   if (o.movers) Movers::intersect(origin, direction, seconds, hit);
+  if (o.walkers) Walkers::intersect(origin, direction, seconds, hit);
 }
 
 // Camera to world at `eye` looking at `target`, image rows level (world y is down).
@@ -223,7 +247,7 @@ Eigen::Isometry3d corridor_pose(double s) {
 }
 
 Eigen::Isometry3d camera_pose(const SyntheticOptions& o, double seconds) {
-  const double duration = (o.frames - 1) / o.fps;
+  const double duration = (std::max(o.frames, o.path_frames) - 1) / o.fps;
   if (o.kidnap_frame > 0 && seconds >= o.kidnap_frame / o.fps - 1e-9) seconds -= (o.kidnap_frame - o.kidnap_to) / o.fps;
   const double s = duration > 0 ? std::clamp(seconds / duration, 0.0, 1.0) : 0.0;
   const Eigen::Isometry3d arc = o.twin_rooms ? corridor_pose(s) : o.laps > 0 ? lap_pose(s, o.laps) : arc_pose(s);
@@ -294,7 +318,9 @@ SyntheticOptions SyntheticOptions::hard_motion() {
 }
 
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
-  if (o.frames < 1 || o.width < 8 || o.height < 8) throw splat::Error("synthetic sequence: bad size or frame count");
+  if (o.frames < 1 || o.path_frames < 0 || o.width < 8 || o.height < 8) {
+    throw splat::Error("synthetic sequence: bad size or frame count");
+  }
   if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) ||
       !(o.depth_holes >= 0 && o.depth_holes < 1) || !(o.shake_peak_rate >= 0) || !(o.fps > 0) ||
       !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps) ||
@@ -372,7 +398,8 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
         if (z_true[i] <= 0 || holes[i] || (o.depth_holes > 0 && grazing[i])) continue;
         // A depth camera loses most pixels along a moving object's outline (mixed returns).
-        if (o.movers && edge_of_mover(z_true, moving, o.width, o.height, x, y) && std::uniform_real_distribution<>(0, 1)(rng) < 0.6) {
+        if ((o.movers || o.walkers) && edge_of_mover(z_true, moving, o.width, o.height, x, y) &&
+            std::uniform_real_distribution<>(0, 1)(rng) < 0.6) {
           continue;
         }
         double z = z_true[i];

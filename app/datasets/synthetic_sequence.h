@@ -8,6 +8,9 @@ namespace app {
 
 struct SyntheticOptions {
   int frames = 60;
+  // Frames the camera's path is spread over (0: `frames`); more than `frames` writes the start of
+  // a longer sequence (a test's first second of a ten-second walk).
+  int path_frames = 0;
   int width = 320, height = 240;
   double focal = 260;     // pixels; principal point at the image centre
   // A calibration error: intrinsics.txt says focal * (1 + focal_error), the images use focal.
@@ -43,6 +46,9 @@ struct SyntheticOptions {
   // Moving objects (for the arc path): a person walking across the view, a chair pushed a metre
   // and left, a crate that appears (see Movers in the .cpp), with depth lost along their edges.
   bool movers = false;
+  // People walking through the whole sequence (for the arc path): two pacing to and fro across the
+  // view, one near the camera, together often covering most of the image (see Walkers in the .cpp).
+  bool walkers = false;
   // Exact per-pixel class ids in labels/ (16-bit PNG, the colour images' names) with
   // labels/classes.json, which gslam then reads as the sequence's label images.
   bool labels = false;

@@ -57,6 +57,15 @@ std::vector<SyntheticCase> hard_case_suite() {
   o.movers = true;
   o.depth_noise = 0.0015;
   add("moving_objects", "150 frames, a person walking across, a chair pushed 1 m, a crate appearing; Kinect noise", o);
+
+  o = SyntheticOptions{};
+  o.frames = 300;
+  o.walkers = true;
+  o.depth_noise = 0.0015;
+  add("walkers",
+      "300 frames, two people pacing across the view throughout, one 0.6 m from the camera; Kinect "
+      "noise",
+      o);
   return suite;
 }
 

@@ -93,7 +93,8 @@ std::optional<BackEnd::Placement> BackEnd::place(const splat::RgbdFrame& thumb, 
   const tracking::OdometryFrame reference(matched, dense), current(thumb, dense);
   const tracking::OdometryResult aligned = tracking::align_rgbd(reference, current, m.T_keyframe_query.inverse(), dense);
   if (!aligned.converged) return std::nullopt;
-  return Placement{m.keyframe, aligned.T_cur_ref.inverse(), edge_information(aligned.information), m.inliers};
+  return Placement{m.keyframe, aligned.T_cur_ref.inverse(), edge_information(aligned.information),
+                   m.inliers, aligned.depth_spread};
 }
 
 std::optional<BackEnd::Loop> BackEnd::close_loop(const splat::RgbdFrame& frame, std::size_t keyframe,

@@ -36,6 +36,7 @@ class BackEnd {
     Eigen::Isometry3d T_keyframe_frame;
     Eigen::Matrix<double, 6, 6> information;
     int inliers;
+    double depth_spread;  // the dense alignment's (tracking::OdometryResult::depth_spread)
   };
   std::optional<Placement> place(const splat::RgbdFrame& frame, const std::function<bool(std::size_t)>& eligible);
 

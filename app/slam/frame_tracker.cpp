@@ -180,9 +180,9 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
   record.tracked = r.converged;
   record.reason = r.reason;
-  record.residual_scale = r.depth_scale;
+  record.residual_scale = r.depth_spread;
   if (r.converged && config_.odometry.depth_weight > 0) {
-    const double ratio = residual_ratio(r.depth_scale, {residual_scales_.begin(), residual_scales_.end()});
+    const double ratio = residual_ratio(r.depth_spread);
     if (ratio > config_.lost_residual_factor) {
       record.tracked = false;
       record.reason = "depth residuals " + std::to_string(ratio) + " times the recent median (or the sensor noise)";

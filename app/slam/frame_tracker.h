@@ -31,7 +31,8 @@ struct FrameRecord {
   bool tracked = true;  // false: tracking failed even after the retries
   bool retried = false;
   bool relocalized = false;  // lost, then placed by matching it against every keyframe
-  double residual_scale = 0;  // odometry: the depth residuals' scale at the end
+  // Odometry: the depth residuals' spread at the end (tracking::OdometryResult::depth_spread).
+  double residual_scale = 0;
   std::string reason;   // why tracking failed
   bool keyframe = false;
   bool held_out = false;  // a test view: tracked, never mapped
@@ -105,6 +106,10 @@ class FrameTracker {
   // where its depth was taken as it is (FrameRecord::T_colour_depth the identity).
   const splat::RgbdFrame* depth_moved_frame() const { return moved_ ? &*moved_ : nullptr; }
   int moving_factor() const { return moving_factor_; }
+  // An alignment's depth residual spread against the recently tracked frames' (residual_ratio()).
+  double residual_ratio(double scale) const {
+    return app::residual_ratio(scale, {residual_scales_.begin(), residual_scales_.end()});
+  }
   // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
   void relocalized(const FrameRecord& record);
   // The world moved under tracking (a loop closed): the motion model's poses move with it.

@@ -51,11 +51,12 @@ struct SlamConfig {
   // Odometry: a frame lost against the newest reference keyframe is retried against this many
   // older ones.
   int recovery_keyframes = 3;
-  // Odometry: an alignment that converges with its depth residuals' scale this many times the
-  // median of the last frames' has found a wrong pose (a camera carried elsewhere still overlaps
-  // its reference somewhere): the frame counts as lost, and recovery and relocalization follow.
-  // The kidnapped synthetic camera's wrong pose: 1194x; the most of a good frame on teddy: 4.4x,
-  // on 7-Scenes below 3x. The median counts as at least the sensor noise (residual_ratio).
+  // Odometry: an alignment that converges with its depth residuals' spread (median-based,
+  // OdometryResult::depth_spread) this many times the median of the last frames' has found a
+  // wrong pose (a camera carried elsewhere still overlaps its reference somewhere): the frame
+  // counts as lost, and recovery and relocalization follow; a relocalization whose alignment
+  // fails the same test is refused. The most of a good frame on teddy: 2.2x, on 7-Scenes 1.9x.
+  // The median counts as at least the sensor noise (residual_ratio).
   double lost_residual_factor = 10.0;
   // A frame becomes a keyframe every `keyframe_every` frames, or earlier after this much motion
   // since the last keyframe.

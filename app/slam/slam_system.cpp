@@ -292,7 +292,19 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
     synced = tracker_.depth_moved_frame();
     if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
       // Lost even against the recent keyframes: look for the frame among all of them.
-      if (const std::optional<BackEnd::Placement> found = back_end_.place(frame(), [](std::size_t) { return true; })) {
+      std::optional<BackEnd::Placement> found =
+          back_end_.place(frame(), [](std::size_t) { return true; });
+      // A place whose depth does not fit is a view that only looks alike: things that moved as
+      // one (a walking person) match as if the camera had moved.
+      if (const double ratio = found ? tracker_.residual_ratio(found->depth_spread) : 0;
+          ratio > config_.lost_residual_factor) {
+        std::lock_guard lock(mutex_);
+        record.reason += "; not relocalized against the keyframe of frame " +
+                         std::to_string(frame_of_keyframe(found->keyframe)) + ": depth residuals " +
+                         std::to_string(ratio) + " times the recent median";
+        found.reset();
+      }
+      if (found) {
         {
           std::lock_guard lock(mutex_);
           record.T_world_cam = splat::orthonormalized(keyframe_world_[found->keyframe] * found->T_keyframe_frame);

@@ -54,7 +54,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
   const std::vector<app::SyntheticCase> suite = app::hard_case_suite();
   std::set<std::string> names;
   bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
-       long_one = false, moving = false, unsynced = false, exposure = false;
+       long_one = false, moving = false, walking = false, unsynced = false, exposure = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -64,11 +64,12 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     miscalibrated |= c.options.focal_error != 0;
     long_one |= c.options.frames >= 700;
     moving |= c.options.movers && !c.options.labels;  // found without a model, not from labels
+    walking |= c.options.walkers && !c.options.labels;
     unsynced |= c.options.depth_lag > 0;
     exposure |= c.options.gain_swing > 0;
   }
-  EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && unsynced &&
-              exposure);
+  EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && walking &&
+              unsynced && exposure);
 }
 
 }  // namespace

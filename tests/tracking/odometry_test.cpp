@@ -197,6 +197,34 @@ TEST(RgbdOdometry, BlackReferenceLeavesTheGainAtOne) {
   EXPECT_TRUE(r.T_cur_ref.matrix().allFinite());
 }
 
+// A person walking in front of the camera covers a quarter of the reference's points: a flat,
+// evenly coloured surface 0.6 m away. The pose is still found, and the depth residuals' spread
+// stays within the sensor noise, where the t-distribution's scale (which gives way once about a
+// sixth of the points are occluded) grows many times over: the spread is what tells a lost frame.
+TEST(RgbdOdometry, DepthSpreadIgnoresAnOccluderInFrontOfTheScene) {
+  gslam::test::TempDir dir;
+  const app::Dataset d = synthetic(dir, 20);
+  splat::RgbdFrame occluded = d.load(2);
+  const int w = occluded.width(), h = occluded.height();
+  for (int y = 0; y < h; ++y) {
+    for (int x = w * 3 / 4; x < w; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      occluded.depth[p] = 0.6f;
+      for (int c = 0; c < 3; ++c) occluded.rgb[p * 3 + c] = 0.45f;
+    }
+  }
+  const tracking::OdometryConfig config;
+  const tracking::OdometryFrame ref(d.load(0), config);
+  const tracking::OdometryResult r = tracking::align_rgbd(
+      ref, tracking::OdometryFrame(occluded, config), Eigen::Isometry3d::Identity(), config);
+  ASSERT_TRUE(r.converged) << r.reason;
+  const PoseError e = pose_error(r.T_cur_ref, true_motion(d, 0, 2));
+  EXPECT_LT(e.translation_m, 0.003);
+  EXPECT_LT(e.rotation_deg, 0.2);
+  EXPECT_LT(r.depth_spread, 1.0) << "within the modelled sensor noise";
+  EXPECT_GT(r.depth_scale, 10 * r.depth_spread) << "the t-distribution's scale, for contrast";
+}
+
 // A frame of another part of the room shares too little with the reference: reported, not a
 // confident wrong pose.
 TEST(RgbdOdometry, ReportsFramesItCannotAlign) {

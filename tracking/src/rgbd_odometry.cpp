@@ -145,6 +145,7 @@ struct Normal {
   Vector6d b = Vector6d::Zero();
   double cost = 0;
   std::size_t seen = 0;  // points with a depth sample in the current frame
+  double depth_median_square = 0;  // the median squared depth residual (in sensor noise units)
   // Per photometric term: the reference's intensity and the current frame's where it lands.
   std::vector<std::pair<float, float>> intensities;
 };
@@ -234,7 +235,8 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
   // Points that leave the image (or land on no depth) cost as much as a residual of three
   // scales: otherwise a step that pushes points out of view would look like an improvement.
   const double lost_cost = std::log1p(9 / c.t_dof);
-  auto accumulate = [&](const std::vector<Term>& terms, double weight, double& scale) {
+  auto accumulate = [&](const std::vector<Term>& terms, double weight, double& scale,
+                        double* median_square) {
     std::vector<float> squares(terms.size());
     for (std::size_t k = 0; k < terms.size(); ++k) squares[k] = terms[k].r * terms[k].r;
     if (estimate) scale = t_scale(squares, c.t_dof);
@@ -254,9 +256,15 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
     out.b += weight * b.cast<double>();
     cost += lost_cost * static_cast<double>(n - terms.size());
     out.cost += weight * cost / std::max<double>(1, static_cast<double>(n));
+    if (median_square && !squares.empty()) {
+      const auto middle = squares.begin() + static_cast<std::ptrdiff_t>(squares.size() / 2);
+      std::nth_element(squares.begin(), middle, squares.end());
+      *median_square = *middle;
+    }
   };
-  accumulate(photometric, 1.0, intensity_scale);
-  if (c.depth_weight > 0) accumulate(geometric, c.depth_weight, depth_scale);
+  accumulate(photometric, 1.0, intensity_scale, nullptr);
+  if (c.depth_weight > 0)
+    accumulate(geometric, c.depth_weight, depth_scale, &out.depth_median_square);
   return out;
 }
 
@@ -380,6 +388,7 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
       result.overlap = ref.points.empty() ? 0 : static_cast<double>(normal.seen) / static_cast<double>(ref.points.size());
       result.intensity_scale = intensity_scale;
       result.depth_scale = depth_scale;
+      result.depth_spread = 1.4826 * std::sqrt(normal.depth_median_square);  // a normal's sigma
       result.gain = gain;
     }
   }

@@ -99,6 +99,11 @@ struct OdometryResult {
   // T_cur_ref, translation first), in the robust weighted residuals' units.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   double intensity_scale = 0, depth_scale = 0;  // the t-distribution scales at the end
+  // The depth residuals' spread at the final pose, robustly (1.4826 x their median magnitude,
+  // in units of the sensor noise; 0 without depth terms). Unlike depth_scale it holds while up to
+  // half the points are occluded (a person walking in front): the t-distribution's scale gives
+  // way once about 1 / (t_dof + 1) of them are.
+  double depth_spread = 0;
   // The colour gain I_cur / I_ref the finest level aligned with (estimate_brightness; else 1).
   double gain = 1;
 };
