@@ -97,7 +97,7 @@ TEST(MovingObjects, TrackingLeavesOutAPersonWalkingThroughTheView) {
 }
 
 // Two people pacing across the view from the first frame on, one 0.6 m from the camera, cover
-// up to four fifths of the image (TUM's fr3/walking). Each frame is still tracked: the lost test
+// up to four fifths of the image (TUM's fr3/walking). Each frame is tracked: the lost test
 // reads the depth residuals' median spread, which the people's occlusions leave alone, where the
 // t-distribution's scale (the test before) called 23 of these 30 frames lost (ATE 45 cm). What
 // is left is drift, 1.7 cm in this second (docs/tuning.md).

@@ -596,6 +596,34 @@ TEST(SlamSystem, UnsynchronizedDepthIsMovedToTheColoursInstant) {
 // A kidnapped camera: at frame 60 it is carried back to where it was at frame 15. Tracking
 // loses it, relocalization finds it among the keyframes within 10 frames, and the rest of the
 // run continues in the same map, at the true poses.
+// A frame tracking cannot place (the view from the sequence's far end, stamped in its middle) is
+// lost, and reported where the camera's motion predicts it, not where the refused alignment
+// ended; the next frame is tracked again.
+TEST(SlamSystem, LostFrameIsPlacedWhereTheMotionPredicts) {
+  gslam::test::TempDir dir;
+  const app::Dataset dataset = synthetic_dataset(dir, 30);
+  app::SlamConfig config;
+  config.loop_closure.enabled = false;  // no relocalization: the frame stays lost
+  config.mapping.iterations = 3;
+  auto rasterizer = splat::make_cpu_rasterizer();
+  app::SlamSystem slam(*rasterizer, config);
+  std::vector<app::FrameRecord> records;
+  for (std::size_t i = 0; i < 12; ++i) {
+    splat::RgbdFrame frame = dataset.load(i == 10 ? 29 : i);
+    frame.timestamp = dataset.entries[i].timestamp;
+    records.push_back(slam.process(frame));
+  }
+  ASSERT_FALSE(records[10].tracked) << "the far view must not align";
+  // Poses are in the first camera's frame.
+  const Eigen::Isometry3d truth =
+      dataset.entries[0].T_world_cam_truth->inverse() * *dataset.entries[10].T_world_cam_truth;
+  const double error = (records[10].T_world_cam.translation() - truth.translation()).norm();
+  std::printf("lost frame (%s): %.2f mm from where the camera was\n", records[10].reason.c_str(),
+              1000 * error);
+  EXPECT_LT(error, 0.005);
+  EXPECT_TRUE(records[11].tracked) << records[11].reason;
+}
+
 TEST(SlamSystem, KidnappedCameraIsRelocalizedInTheSameMap) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
