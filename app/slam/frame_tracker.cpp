@@ -187,7 +187,8 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
     const double ratio = residual_ratio(r.depth_spread);
     if (ratio > config_.lost_residual_factor) {
       record.tracked = false;
-      record.reason = "depth residuals " + std::to_string(ratio) + " times the recent median (or the sensor noise)";
+      record.reason = "depth residuals spread " + std::to_string(ratio) +
+                      " times the recent median (or the sensor noise)";
     }
   }
   record.overlap = r.overlap;

@@ -300,8 +300,9 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
           ratio > config_.lost_residual_factor) {
         std::lock_guard lock(mutex_);
         record.reason += "; not relocalized against the keyframe of frame " +
-                         std::to_string(frame_of_keyframe(found->keyframe)) + ": depth residuals " +
-                         std::to_string(ratio) + " times the recent median";
+                         std::to_string(frame_of_keyframe(found->keyframe)) +
+                         ": depth residuals spread " + std::to_string(ratio) +
+                         " times the recent median";
         found.reset();
       }
       if (found) {
