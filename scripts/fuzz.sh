@@ -47,7 +47,7 @@ printf '{"keyframe_every": 4, "odometry": {"iterations": [3, 3]}, "mapping": {"w
 seed config "$build/made/config.json"
 # A checkpoint of an empty run: magic, header length (8 bytes, little-endian), header, 17 empty arrays.
 header='{"run":{},"tracker":{"last_poses":[],"last_times":[],"last_keyframe":[1,0,0,0,0,1,0,0,0,0,1,0],'\
-'"since_keyframe":0,"references":[],"residual_scales":[]},"mapper":{"sh_degree":0,"keyframes":[],"vignetting":[0,0],'\
+'"since_keyframe":0,"references":[],"residual_spreads":[]},"mapper":{"sh_degree":0,"keyframes":[],"vignetting":[0,0],'\
 '"vignetting_m":[0,0],"vignetting_v":[0,0],"vignetting_steps":0,"added":0,"rng":"1"},"mapper_keyframes":[],'\
 '"keyframe_world":[],"frames":[],"totals":{"keyframes_mapped":0,"keyframes_skipped":0,"gaussians_added":0,'\
 '"gaussians_pruned":0,"iterations":0,"last_loss":0,"mapping_ms":0},"edges":[],"loop_events":[],'\

@@ -318,8 +318,11 @@ SyntheticOptions SyntheticOptions::hard_motion() {
 }
 
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
-  if (o.frames < 1 || o.path_frames < 0 || o.width < 8 || o.height < 8) {
+  if (o.frames < 1 || o.width < 8 || o.height < 8)
     throw splat::Error("synthetic sequence: bad size or frame count");
+  if (o.path_frames != 0 && o.path_frames < o.frames) {
+    throw splat::Error("synthetic sequence: path_frames " + std::to_string(o.path_frames) +
+                       " must be 0 or at least frames (" + std::to_string(o.frames) + ")");
   }
   if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) ||
       !(o.depth_holes >= 0 && o.depth_holes < 1) || !(o.shake_peak_rate >= 0) || !(o.fps > 0) ||

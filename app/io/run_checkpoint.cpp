@@ -105,7 +105,7 @@ json tracker_to_json(const FrameTracker::State& t) {
           {"since_keyframe", t.since_keyframe},
           {"references", t.references},
           {"reference_rates", t.reference_rates},
-          {"residual_scales", t.residual_scales},
+          {"residual_spreads", t.residual_spreads},
           {"exposure_samples", t.exposure_samples},
           {"reference_labels", label_sets_to_json(t.reference_labels)},
           {"moving", labels_to_json(t.moving)}};
@@ -118,7 +118,7 @@ FrameTracker::State tracker_from_json(const json& j, std::uint64_t& label_pixels
                         j.at("since_keyframe").get<int>(),
                         j.at("references").get<std::vector<std::size_t>>(),
                         j.at("reference_rates").get<std::vector<double>>(),
-                        j.at("residual_scales").get<std::vector<double>>(),
+                        j.at("residual_spreads").get<std::vector<double>>(),
                         j.at("exposure_samples").get<std::vector<std::array<double, 2>>>(),
                         {},
                         {}};

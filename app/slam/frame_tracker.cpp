@@ -96,12 +96,17 @@ std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
   return prepared;
 }
 
-double residual_ratio(double scale, std::vector<double> recent) {
+double residual_ratio(double spread, std::vector<double> recent) {
   if (recent.size() < 5) return 0;
   std::nth_element(recent.begin(), recent.begin() + static_cast<long>(recent.size() / 2), recent.end());
   // Never below the sensor noise: on noise-free depth the median is far under it, and a surface
   // coming into view read as lost at a correct pose (docs/tuning.md).
-  return scale / std::max(recent[recent.size() / 2], 1.0);
+  return spread / std::max(recent[recent.size() / 2], 1.0);
+}
+
+std::string residual_spread_reason(double ratio) {
+  return "depth residuals spread " + std::to_string(ratio) +
+         " times the recent median (or the sensor noise)";
 }
 
 FrameTracker::FrameTracker(splat::Rasterizer& rasterizer, const SlamConfig& config)
@@ -145,8 +150,8 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   record.tracking_ms = ms_since(start);
   // A failed frame's pose is a guess: the motion model keeps the last tracked poses.
   if (record.tracked && config_.front_end == "odometry") {
-    residual_scales_.push_back(record.residual_scale);
-    if (residual_scales_.size() > 20) residual_scales_.pop_front();
+    residual_spreads_.push_back(record.residual_spread);
+    if (residual_spreads_.size() > 20) residual_spreads_.pop_front();
   }
   if (record.tracked) {
     last_poses_ = {last_poses_.back(), record.T_world_cam};
@@ -182,13 +187,12 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
   record.tracked = r.converged;
   record.reason = r.reason;
-  record.residual_scale = r.depth_spread;
+  record.residual_spread = r.depth_spread;
   if (r.converged && config_.odometry.depth_weight > 0) {
     const double ratio = residual_ratio(r.depth_spread);
     if (ratio > config_.lost_residual_factor) {
       record.tracked = false;
-      record.reason = "depth residuals spread " + std::to_string(ratio) +
-                      " times the recent median (or the sensor noise)";
+      record.reason = residual_spread_reason(ratio);
     }
   }
   record.overlap = r.overlap;
@@ -380,7 +384,7 @@ FrameTracker::State FrameTracker::state() const {
           since_keyframe_,
           {},
           {},
-          {residual_scales_.begin(), residual_scales_.end()},
+          {residual_spreads_.begin(), residual_spreads_.end()},
           exposure_.samples(),
           {},
           moving_};
@@ -420,7 +424,7 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
   last_keyframe_ = s.last_keyframe;
   since_keyframe_ = s.since_keyframe;
   references_ = std::move(references);
-  residual_scales_.assign(s.residual_scales.begin(), s.residual_scales.end());
+  residual_spreads_.assign(s.residual_spreads.begin(), s.residual_spreads.end());
   exposure_.restore(s.exposure_samples);
   moving_ = s.moving;
   last_prepared_.reset();  // set by the next track() before anything reads it

@@ -27,12 +27,13 @@ namespace app {
 // What the system did with one frame.
 struct FrameRecord {
   double timestamp = 0;
-  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // as tracked
+  Eigen::Isometry3d T_world_cam =
+      Eigen::Isometry3d::Identity();  // as tracked; lost (odometry): as predicted
   bool tracked = true;  // false: tracking failed even after the retries
   bool retried = false;
   bool relocalized = false;  // lost, then placed by matching it against every keyframe
   // Odometry: the depth residuals' spread at the end (tracking::OdometryResult::depth_spread).
-  double residual_scale = 0;
+  double residual_spread = 0;
   std::string reason;   // why tracking failed
   bool keyframe = false;
   bool held_out = false;  // a test view: tracked, never mapped
@@ -51,11 +52,13 @@ struct FrameRecord {
   std::size_t gaussians = 0;  // in the map after this frame
 };
 
-// An odometry alignment's depth residual scale (units of the modelled sensor noise, depth_noise
-// z^2) over the median of the `recent` tracked frames' scales, that median taken as at least the
-// sensor noise (1): a frame is lost above SlamConfig::lost_residual_factor. 0 while fewer than
-// five frames are recent.
-double residual_ratio(double scale, std::vector<double> recent);
+// An odometry alignment's depth residual spread (tracking::OdometryResult::depth_spread, units of
+// the modelled sensor noise, depth_noise z^2) over the median of the `recent` tracked frames'
+// spreads, that median taken as at least the sensor noise (1): a frame is lost above
+// SlamConfig::lost_residual_factor. 0 while fewer than five frames are recent.
+double residual_ratio(double spread, std::vector<double> recent);
+// Why a frame with residual_ratio() `ratio` counts as lost, for FrameRecord::reason.
+std::string residual_spread_reason(double ratio);
 
 // Labels at 1/factor resolution (labels_width wide) spread over a width x height frame, each
 // pixel taking its block's (edge blocks extend over the remainder).
@@ -107,8 +110,8 @@ class FrameTracker {
   const splat::RgbdFrame* depth_moved_frame() const { return moved_ ? &*moved_ : nullptr; }
   int moving_factor() const { return moving_factor_; }
   // An alignment's depth residual spread against the recently tracked frames' (residual_ratio()).
-  double residual_ratio(double scale) const {
-    return app::residual_ratio(scale, {residual_scales_.begin(), residual_scales_.end()});
+  double residual_ratio(double spread) const {
+    return app::residual_ratio(spread, {residual_spreads_.begin(), residual_spreads_.end()});
   }
   // A lost frame placed by relocalization (record.T_world_cam): the motion model restarts there.
   void relocalized(const FrameRecord& record);
@@ -123,7 +126,7 @@ class FrameTracker {
     int since_keyframe = 0;
     std::vector<std::size_t> references;  // odometry: reference keyframe numbers, newest first
     std::vector<double> reference_rates;  // and their angular rates
-    std::vector<double> residual_scales;  // the last tracked frames' depth residual scales
+    std::vector<double> residual_spreads;  // the last tracked frames' depth residual spreads
     std::vector<std::array<double, 2>> exposure_samples;  // tracking::ExposureEstimate::samples()
     // Odometry with moving regions: the labels each reference was prepared with (its own
     // moving_labels(), or the prior of a frame tracking lost and relocalized), in the order of
@@ -175,7 +178,7 @@ class FrameTracker {
   std::shared_ptr<const tracking::OdometryFrame> last_prepared_;
   std::vector<uint8_t> last_prepared_labels_;  // the labels last_prepared_ left out
   std::deque<Reference> references_;
-  std::deque<double> residual_scales_;  // depth residual scales of the last tracked frames
+  std::deque<double> residual_spreads_;  // depth residual spreads of the last tracked frames
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
   std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
   std::optional<splat::RgbdFrame> moved_;  // depth_moved_frame()

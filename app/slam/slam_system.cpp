@@ -295,14 +295,15 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
       std::optional<BackEnd::Placement> found =
           back_end_.place(frame(), [](std::size_t) { return true; });
       // A place whose depth does not fit is a view that only looks alike: things that moved as
-      // one (a walking person) match as if the camera had moved.
+      // one (a walking person) match as if the camera had moved. The place's spread is measured
+      // on the back end's thumbnails (dense_width), the recent spreads at tracking's finest level:
+      // a coarse test, which refuses only placements far off.
       if (const double ratio = found ? tracker_.residual_ratio(found->depth_spread) : 0;
           ratio > config_.lost_residual_factor) {
         std::lock_guard lock(mutex_);
         record.reason += "; not relocalized against the keyframe of frame " +
-                         std::to_string(frame_of_keyframe(found->keyframe)) +
-                         ": depth residuals spread " + std::to_string(ratio) +
-                         " times the recent median";
+                         std::to_string(frame_of_keyframe(found->keyframe)) + ": " +
+                         residual_spread_reason(ratio);
         found.reset();
       }
       if (found) {

@@ -17,8 +17,8 @@ TEST(ResidualRatio, AgainstTheMedianOfTheRecentFrames) {
   EXPECT_EQ(app::residual_ratio(1000, {2, 2, 2, 2}), 0) << "fewer than five frames say nothing";
 }
 
-// Noise-free depth (a generated sequence) gives residual scales far below the sensor noise; a
-// surface coming into view then raised the scale 24x at a correct pose (generated loop_blur,
+// Noise-free depth (a generated sequence) gives residual spreads far below the sensor noise; a
+// surface coming into view then raised the spread 24x at a correct pose (generated loop_blur,
 // frame 180), and the frame was called lost. Under the sensor noise nothing is lost.
 TEST(ResidualRatio, NeverCountsResidualsUnderTheSensorNoiseAsLost) {
   const std::vector<double> noise_free = {0.01, 0.012, 0.011, 0.009, 0.01};

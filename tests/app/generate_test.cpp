@@ -1,12 +1,14 @@
 // gslam generate: synthetic sequences that reconstruct and benchmark read as they read real ones.
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <set>
 
-#include <gtest/gtest.h>
-
 #include "app/run_gslam.h"
 #include "datasets/dataset.h"
+#include "datasets/synthetic_sequence.h"
 #include "datasets/synthetic_suite.h"
+#include "splat/error.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -47,6 +49,24 @@ TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
   EXPECT_NE(suite.exit_code, 0);
   EXPECT_EQ(suite.output, "error: gslam generate: --frames describes one sequence; --suite writes its own\n");
   EXPECT_FALSE(std::filesystem::exists(dir / "suite"));
+}
+
+// A path shorter than the frames written would leave the camera still past its end.
+TEST(SyntheticSequence, RefusesAPathShorterThanItsFrames) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 5;
+  o.width = 16;
+  o.height = 12;
+  o.path_frames = 4;
+  try {
+    app::write_synthetic_sequence(dir / "seq", o);
+    ADD_FAILURE() << "path_frames 4 under frames 5 was accepted";
+  } catch (const splat::Error& e) {
+    EXPECT_STREQ(e.what(), "synthetic sequence: path_frames 4 must be 0 or at least frames (5)");
+  }
+  o.path_frames = 5;
+  EXPECT_NO_THROW(app::write_synthetic_sequence(dir / "seq", o));
 }
 
 // The suite holds each hard case that docs/tuning.md names, under distinct folder names.
