@@ -120,11 +120,14 @@ void RunOutputs::update_poses(const std::vector<Eigen::Isometry3d>& T_world_cam)
 }
 
 std::string describe(const LoopEvent& loop) {
-  char text[160];
+  char text[200];
   std::snprintf(text, sizeof text, "loop: frame %zu -> frame %zu, %d inliers, drift %.1f cm / %.1f deg: %s", loop.frame,
                 loop.matched_frame, loop.inliers, 100 * loop.drift_m, loop.drift_deg,
                 loop.accepted ? "accepted" : "rejected");
-  return text;
+  std::string line = text;
+  if (loop.confirms_frame)
+    line += ", confirming the loop of frame " + std::to_string(*loop.confirms_frame);
+  return line;
 }
 
 void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent>& loops, bool on_device,
@@ -133,8 +136,14 @@ void RunOutputs::set_mapping(const MappingTotals& t, const std::vector<LoopEvent
   std::size_t accepted = 0;
   for (const LoopEvent& e : loops) {
     accepted += e.accepted;
-    events.push_back({{"frame", e.frame}, {"matched_frame", e.matched_frame}, {"inliers", e.inliers},
-                      {"drift_m", e.drift_m}, {"drift_deg", e.drift_deg}, {"accepted", e.accepted}});
+    events.push_back({{"frame", e.frame},
+                      {"matched_frame", e.matched_frame},
+                      {"inliers", e.inliers},
+                      {"drift_m", e.drift_m},
+                      {"drift_deg", e.drift_deg},
+                      {"accepted", e.accepted},
+                      {"confirms_frame",
+                       e.confirms_frame ? nlohmann::json(*e.confirms_frame) : nlohmann::json()}});
   }
   extra_["loops"] = {{"accepted", accepted}, {"rejected", loops.size() - accepted}, {"events", events},
                      {"covisible_edges", t.covisible_edges}, {"covisible_rejected", t.covisible_rejected}};

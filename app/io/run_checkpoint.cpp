@@ -229,8 +229,12 @@ std::vector<SlamSystem::FramePose> frames_from_json(const json& j) {
 json edges_to_json(const std::vector<tracking::PoseGraphEdge>& edges) {
   json j = json::array();
   for (const auto& e : edges) {
-    j.push_back({{"i", e.i}, {"j", e.j}, {"T_i_j", pose_to_json(e.T_i_j)},
-                 {"information", vector_to_json(e.information.data(), 36)}, {"loop", e.loop}});
+    j.push_back({{"i", e.i},
+                 {"j", e.j},
+                 {"T_i_j", pose_to_json(e.T_i_j)},
+                 {"information", vector_to_json(e.information.data(), 36)},
+                 {"loop", e.loop},
+                 {"confirmed", e.confirmed}});
   }
   return j;
 }
@@ -244,6 +248,7 @@ std::vector<tracking::PoseGraphEdge> edges_from_json(const json& j) {
     edge.T_i_j = pose_from_json(e.at("T_i_j"));
     vector_from_json<36>(e.at("information"), edge.information.data());
     edge.loop = e.at("loop").get<bool>();
+    edge.confirmed = e.value("confirmed", false);  // absent before confirmed loops
     edges.push_back(edge);
   }
   return edges;
@@ -254,6 +259,7 @@ json loop_events_to_json(const std::vector<LoopEvent>& events) {
   for (const auto& e : events) {
     j.push_back({{"frame", e.frame}, {"matched_frame", e.matched_frame}, {"inliers", e.inliers},
                  {"drift_m", e.drift_m}, {"drift_deg", e.drift_deg}, {"accepted", e.accepted}});
+    if (e.confirms_frame) j.back()["confirms_frame"] = *e.confirms_frame;
   }
   return j;
 }
@@ -261,8 +267,11 @@ json loop_events_to_json(const std::vector<LoopEvent>& events) {
 std::vector<LoopEvent> loop_events_from_json(const json& j) {
   std::vector<LoopEvent> events;
   for (const json& e : j.get_ref<const json::array_t&>()) {
-    events.push_back({e.at("frame").get<std::size_t>(), e.at("matched_frame").get<std::size_t>(), e.at("inliers").get<int>(),
-                      e.at("drift_m").get<double>(), e.at("drift_deg").get<double>(), e.at("accepted").get<bool>()});
+    events.push_back({e.at("frame").get<std::size_t>(), e.at("matched_frame").get<std::size_t>(),
+                      e.at("inliers").get<int>(), e.at("drift_m").get<double>(),
+                      e.at("drift_deg").get<double>(), e.at("accepted").get<bool>(), std::nullopt});
+    if (e.contains("confirms_frame"))
+      events.back().confirms_frame = e.at("confirms_frame").get<std::size_t>();
   }
   return events;
 }
@@ -379,6 +388,7 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                  {"frames", frames_to_json(s.frames)},
                  {"totals", totals_to_json(s.totals)},
                  {"edges", edges_to_json(s.back_end.edges)},
+                 {"rejected_loops", edges_to_json(s.back_end.rejected_loops)},
                  {"loop_events", loop_events_to_json(s.loop_events)},
                  {"tracker_correction", pose_to_json(s.tracker_correction)},
                  {"covisible", s.back_end.covisible},
@@ -427,6 +437,8 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     c.slam.frames = frames_from_json(header.at("frames"));
     c.slam.totals = totals_from_json(header.at("totals"));
     c.slam.back_end.edges = edges_from_json(header.at("edges"));
+    if (header.contains("rejected_loops"))
+      c.slam.back_end.rejected_loops = edges_from_json(header.at("rejected_loops"));
     c.slam.loop_events = loop_events_from_json(header.at("loop_events"));
     c.slam.tracker_correction = pose_from_json(header.at("tracker_correction"));
     // Checkpoints from before covisibility continue with none (it links the next keyframes).

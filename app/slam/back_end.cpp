@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <string>
 
 #include "splat/error.h"
@@ -128,10 +129,46 @@ std::optional<BackEnd::Loop> BackEnd::close_loop(const splat::RgbdFrame& frame, 
   result.drift_deg = Eigen::AngleAxisd(revealed.linear()).angle() * 180 / M_PI;
   tracking::PoseGraphResult solved = tracking::optimize_pose_graph(poses, edges, {0}, lc.graph);
   result.accepted = solved.accepted.back();
+  std::vector<tracking::PoseGraphEdge> added = {loop};
+  if (!result.accepted) {
+    // Drift that came at once (a frame aligned to someone walking past) is confirmed by a second
+    // detection revealing the same error, rejected or accepted; a look-alike place seldom
+    // repeats its error.
+    const auto recent = [&](const tracking::PoseGraphEdge& e) {
+      return e.loop && e.j + static_cast<std::size_t>(lc.confirm_within) >= loop.j;
+    };
+    while (!rejected_loops_.empty() && !recent(rejected_loops_.front()))
+      rejected_loops_.pop_front();
+    std::vector<tracking::PoseGraphEdge> candidates(rejected_loops_.rbegin(),
+                                                    rejected_loops_.rend());
+    const std::size_t rejected = candidates.size();
+    std::copy_if(edges.rbegin() + 1, edges.rend(), std::back_inserter(candidates), recent);
+    for (std::size_t c = 0; c < candidates.size() && !result.accepted; ++c) {
+      if (!tracking::loops_agree(poses, loop, candidates[c], lc.graph)) continue;
+      added = {loop};
+      added[0].confirmed = true;
+      if (c < rejected) {  // the earlier one joins the graph with it
+        added.insert(added.begin(), candidates[c]);
+        added[0].confirmed = true;
+      }
+      std::vector<tracking::PoseGraphEdge> trial(edges.begin(), edges.end() - 1);
+      trial.insert(trial.end(), added.begin(), added.end());
+      tracking::PoseGraphResult again = tracking::optimize_pose_graph(poses, trial, {0}, lc.graph);
+      if (!std::all_of(again.accepted.end() - static_cast<long>(added.size()), again.accepted.end(),
+                       [](bool a) { return a; })) {
+        continue;
+      }
+      result.accepted = true;
+      result.confirms = candidates[c].j;
+      solved = std::move(again);
+      if (c < rejected) rejected_loops_.erase(rejected_loops_.end() - 1 - static_cast<long>(c));
+    }
+    if (!result.accepted) added = {loop}, rejected_loops_.push_back(loop);
+  }
   if (result.accepted) {
     result.solved = std::move(solved.poses);
     std::lock_guard lock(graph_mutex_);
-    edges_.push_back(loop);
+    edges_.insert(edges_.end(), added.begin(), added.end());
   }
   return result;
 }
@@ -200,6 +237,7 @@ BackEnd::State BackEnd::state() const {
     std::lock_guard lock(graph_mutex_);
     s.edges = edges_;
   }
+  s.rejected_loops.assign(rejected_loops_.begin(), rejected_loops_.end());
   for (const FrameTracker::PreparedKeyframe& k : covisible_) {
     s.covisible.push_back(k.keyframe);
     s.covisible_rates.push_back(k.angular_rate);
@@ -211,9 +249,13 @@ BackEnd::State BackEnd::state() const {
 void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::size_t>& mapped,
                       const std::function<splat::RgbdFrame(std::size_t)>& keyframe) {
   auto inconsistent = [](const std::string& what) { throw splat::Error("SlamSystem::restore: " + what); };
-  for (const tracking::PoseGraphEdge& e : s.edges) {
-    if (e.i >= keyframes || e.j >= keyframes) inconsistent("a pose graph edge names a keyframe that does not exist");
+  for (const auto* edges : {&s.edges, &s.rejected_loops}) {
+    for (const tracking::PoseGraphEdge& e : *edges) {
+      if (e.i >= keyframes || e.j >= keyframes)
+        inconsistent("a pose graph edge names a keyframe that does not exist");
+    }
   }
+  rejected_loops_.assign(s.rejected_loops.begin(), s.rejected_loops.end());
   if (s.covisible.size() > static_cast<std::size_t>(config_.loop_closure.covisible_keyframes) + 1) {
     inconsistent(std::to_string(s.covisible.size()) +
                  " covisible keyframes, more than covisible_keyframes " +

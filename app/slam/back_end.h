@@ -48,6 +48,9 @@ class BackEnd {
     int inliers = 0;
     double drift_m = 0, drift_deg = 0;  // the error it revealed in the poses before solving
     bool accepted = false;
+    // Accepted together with an earlier detection it agrees with, outside the drift budget
+    // (LoopClosureConfig::confirm_within): that detection's keyframe, which is now linked too.
+    std::optional<std::size_t> confirms;
     std::vector<Eigen::Isometry3d> solved;  // accepted: every keyframe's pose
   };
   std::optional<Loop> close_loop(const splat::RgbdFrame& frame, std::size_t keyframe,
@@ -61,9 +64,11 @@ class BackEnd {
   Linked link_covisible(const FrameTracker::PreparedKeyframe& keyframe, const tracking::OdometryConfig& odometry,
                         const std::vector<Eigen::Isometry3d>& poses);
 
-  // For checkpoints: the graph's edges and covisibility's recent keyframes (numbers, rates).
+  // For checkpoints: the graph's edges, the rejected loops waiting for confirmation, and
+  // covisibility's recent keyframes (numbers, rates).
   struct State {
     std::vector<tracking::PoseGraphEdge> edges;
+    std::vector<tracking::PoseGraphEdge> rejected_loops;
     std::vector<std::size_t> covisible;
     std::vector<double> covisible_rates;
     std::vector<std::vector<uint8_t>>
@@ -88,6 +93,8 @@ class BackEnd {
   tracking::PlaceDatabase places_;
   std::vector<std::pair<std::size_t, splat::RgbdFrame>> thumbnails_;  // keyframe, at dense_width
   std::deque<FrameTracker::PreparedKeyframe> covisible_;  // the mapping thread's: recent keyframes
+  // The mapping thread's: loops the drift budget rejected, waiting for a detection to confirm them.
+  std::deque<tracking::PoseGraphEdge> rejected_loops_;
 };
 
 }  // namespace app

@@ -40,10 +40,13 @@ void SlamConfig::validate() const {
   const tracking::PoseGraphConfig& g = loop_closure.graph;
   check.at_least("loop_closure.max_iterations", g.max_iterations, 1);
   check.positive("loop_closure.loop_huber_sigmas", g.loop_huber_sigmas);
+  check.at_least("loop_closure.odometry_huber_sigmas", g.odometry_huber_sigmas, 0.0);
   check.positive("loop_closure.drift_per_metre", g.drift_per_metre);
   check.positive("loop_closure.drift_deg_per_metre", g.drift_deg_per_metre);
   check.at_least("loop_closure.drift_floor_m", g.drift_floor_m, 0.0);
   check.at_least("loop_closure.drift_floor_deg", g.drift_floor_deg, 0.0);
+  check.at_least("loop_closure.confirmed_budget_factor", g.confirmed_budget_factor, 1.0);
+  check.at_least("loop_closure.confirm_within", loop_closure.confirm_within, 0);
   odometry.validate("odometry.");
   moving.validate("moving.");
   tracking.validate("tracking.");

@@ -25,6 +25,9 @@ struct LoopClosureConfig {
   int dense_width = 160;
   tracking::PlaceRecognitionConfig places;
   tracking::PoseGraphConfig graph;
+  // A loop outside the drift budget waits, rejected, for a detection at most this many keyframes
+  // later that agrees with it (tracking::loops_agree); the two are then solved as confirmed.
+  int confirm_within = 3;
   // Covisibility (odometry front end, whether loops are closed or not): each mapped keyframe
   // blurred by odometry.blur_scale_px or more is also aligned densely, at the tracking
   // resolution, against this many earlier keyframes besides its reference, the most recent ones,

@@ -125,8 +125,10 @@ void SlamSystem::close_loops(const KeyframeJob& job) {
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
-    loop_events_.push_back({frame_of_keyframe(job.keyframe), frame_of_keyframe(loop->matched_keyframe), loop->inliers,
-                            loop->drift_m, loop->drift_deg, loop->accepted});
+    loop_events_.push_back({frame_of_keyframe(job.keyframe),
+                            frame_of_keyframe(loop->matched_keyframe), loop->inliers, loop->drift_m,
+                            loop->drift_deg, loop->accepted, std::nullopt});
+    if (loop->confirms) loop_events_.back().confirms_frame = frame_of_keyframe(*loop->confirms);
     if (!loop->accepted) return;
     mapper_corrections = move_keyframes(poses, loop->solved);
   }

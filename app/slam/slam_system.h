@@ -45,6 +45,9 @@ struct LoopEvent {
   int inliers = 0;
   double drift_m = 0, drift_deg = 0;  // the error it revealed in the poses before solving
   bool accepted = false;  // false: no dense alignment, or outside the drift budget (a look-alike place)
+  // Accepted with the earlier detection at this frame, which it confirmed
+  // (BackEnd::Loop::confirms).
+  std::optional<std::size_t> confirms_frame;
 };
 
 // What mapping did over a run.

@@ -90,6 +90,75 @@ TEST(PoseGraph, WrongLoopIsRejectedAndDoesNotBendTheGraph) {
   EXPECT_LT(rmse(r.poses, truth), rmse(odometry.chained, truth) / 5);
 }
 
+// A walk of 40 keyframes along a line, 2 cm apart, its odometry exact to 0.1 mm but for one
+// edge, where a frame aligned to someone walking past put a 12 cm jump sideways. Two loops from
+// the walk's end to its start, each measured exactly, reveal it.
+struct Jump {
+  std::vector<Isometry> truth;
+  Odometry odometry;
+  tracking::PoseGraphEdge first, second;  // loops 38 -> 2 and 39 -> 3
+};
+Jump odometry_with_a_jump() {
+  Jump j;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 1e-4);
+  for (int k = 0; k < 40; ++k) j.truth.push_back(Isometry(Eigen::Translation3d(0, 0, 0.02 * k)));
+  j.odometry.chained = {j.truth[0]};
+  for (std::size_t k = 1; k < j.truth.size(); ++k) {
+    splat::Vector6d error;
+    for (int c = 0; c < 6; ++c) error[c] = noise(rng);
+    if (k == 21) error[0] += 0.12;
+    tracking::PoseGraphEdge e;
+    e.i = k - 1, e.j = k;
+    e.T_i_j = j.truth[k - 1].inverse() * j.truth[k] * splat::se3_exp(error);
+    e.information = Info::Identity() * 1e6;  // dense alignment: millimetres
+    j.odometry.edges.push_back(e);
+    j.odometry.chained.push_back(j.odometry.chained.back() * e.T_i_j);
+  }
+  j.first = loop_edge(2, 38, j.truth[2].inverse() * j.truth[38]);
+  j.second = loop_edge(3, 39, j.truth[3].inverse() * j.truth[39]);
+  j.first.information = j.second.information = Info::Identity() * 1e6;  // as sure as the odometry
+  return j;
+}
+
+TEST(PoseGraph, AJumpIsConfirmedByASecondLoopAndClosed) {
+  const Jump j = odometry_with_a_jump();
+  std::vector<tracking::PoseGraphEdge> edges = j.odometry.edges;
+  edges.push_back(j.first);
+  EXPECT_FALSE(tracking::optimize_pose_graph(j.odometry.chained, edges, {0}).accepted.back())
+      << "one loop revealing 12 cm over 80 cm of path is outside the drift budget";
+  ASSERT_TRUE(tracking::loops_agree(j.odometry.chained, j.second, j.first))
+      << "both reveal the same jump";
+  edges.back().confirmed = true;
+  tracking::PoseGraphEdge second = j.second;
+  second.confirmed = true;
+  edges.push_back(second);
+  const tracking::PoseGraphResult r = tracking::optimize_pose_graph(j.odometry.chained, edges, {0});
+  ASSERT_TRUE(r.accepted.back() && r.accepted[edges.size() - 2]);
+  // The walk's end is where the loops measured it from its start.
+  for (const tracking::PoseGraphEdge* loop : {&j.first, &j.second}) {
+    const Isometry error = (r.poses[loop->i].inverse() * r.poses[loop->j]).inverse() * loop->T_i_j;
+    EXPECT_LT(error.translation().norm(), 0.005) << "loop " << loop->i << " -> " << loop->j;
+  }
+}
+
+TEST(PoseGraph, LookAlikePlacesAreNotConfirmedByRepeatingThemselves) {
+  const Jump j = odometry_with_a_jump();
+  // The walk's end seen as if it stood at the start, turned a quarter (a symmetric pattern),
+  // twice, from consecutive keyframes: the two agree with each other, not with the true loop.
+  const Isometry turn(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()));
+  tracking::PoseGraphEdge a = loop_edge(2, 38, turn), b = loop_edge(3, 39, turn);
+  EXPECT_TRUE(tracking::loops_agree(j.odometry.chained, a, b));
+  EXPECT_FALSE(tracking::loops_agree(j.odometry.chained, a, j.second));
+  a.confirmed = b.confirmed = true;
+  std::vector<tracking::PoseGraphEdge> edges = j.odometry.edges;
+  edges.push_back(a);
+  edges.push_back(b);
+  const tracking::PoseGraphResult r = tracking::optimize_pose_graph(j.odometry.chained, edges, {0});
+  EXPECT_FALSE(r.accepted.back() || r.accepted[edges.size() - 2])
+      << "90 degrees is outside even a confirmed budget";
+}
+
 TEST(PoseGraph, ResidualIsTheLogOfTheEdgeError) {
   // Two poses, the second off its measurement by a known twist: with identity information the
   // edge's chi-square before solving is that twist's squared norm.

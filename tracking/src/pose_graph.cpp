@@ -105,8 +105,13 @@ int solve(const Parameters& start, Parameters& p, const std::vector<PoseGraphEdg
     if (!use[e]) continue;
     const PoseGraphEdge& edge = edges[e];
     auto* cost = new ceres::AutoDiffCostFunction<EdgeResidual, 6, 4, 3, 4, 3>(new EdgeResidual(residuals[e]));
-    // Loops that pass the gate may still be off by more than their information says.
-    ceres::LossFunction* loss = edge.loop ? new ceres::HuberLoss(config.loop_huber_sigmas) : nullptr;
+    // PoseGraphConfig: loops that pass the gate may still be off; odometry may hold a jump.
+    ceres::LossFunction* loss = nullptr;
+    if (edge.loop) {
+      loss = new ceres::HuberLoss(config.loop_huber_sigmas);
+    } else if (config.odometry_huber_sigmas > 0) {
+      loss = new ceres::HuberLoss(config.odometry_huber_sigmas);
+    }
     problem.AddResidualBlock(cost, loss, p.q[edge.i].coeffs().data(), p.t[edge.i].data(), p.q[edge.j].coeffs().data(),
                              p.t[edge.j].data());
   }
@@ -129,6 +134,23 @@ int solve(const Parameters& start, Parameters& p, const std::vector<PoseGraphEdg
 }
 
 }  // namespace
+
+bool loops_agree(const std::vector<Eigen::Isometry3d>& poses, const PoseGraphEdge& a,
+                 const PoseGraphEdge& b, const PoseGraphConfig& config) {
+  for (const PoseGraphEdge* e : {&a, &b}) {
+    if (e->i >= poses.size() || e->j >= poses.size())
+      throw splat::Error("loops_agree: a loop names a missing pose");
+  }
+  const Eigen::Isometry3d by_a = poses[a.i] * a.T_i_j;
+  const Eigen::Isometry3d by_b = poses[b.i] * b.T_i_j * poses[b.j].inverse() * poses[a.j];
+  const Eigen::Isometry3d difference = by_a.inverse() * by_b;
+  const double apart = (poses[a.i].translation() - poses[b.i].translation()).norm() +
+                       (poses[a.j].translation() - poses[b.j].translation()).norm();
+  return difference.translation().norm() <=
+             std::max(config.drift_floor_m, config.drift_per_metre * apart) &&
+         Eigen::AngleAxisd(difference.linear()).angle() * 180 / M_PI <=
+             std::max(config.drift_floor_deg, config.drift_deg_per_metre * apart);
+}
 
 PoseGraphResult optimize_pose_graph(const std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                     const std::vector<std::size_t>& fixed, const PoseGraphConfig& config) {
@@ -182,8 +204,11 @@ PoseGraphResult optimize_pose_graph(const std::vector<Eigen::Isometry3d>& poses,
     const double travelled = std::abs(path[edge.j] - path[edge.i]);
     const double translation = Eigen::Vector3d(error[0], error[1], error[2]).norm();
     const double degrees = Eigen::Vector3d(error[3], error[4], error[5]).norm() * 180 / M_PI;
-    return translation <= std::max(config.drift_floor_m, config.drift_per_metre * travelled) &&
-           degrees <= std::max(config.drift_floor_deg, config.drift_deg_per_metre * travelled);
+    const double factor = edge.confirmed ? config.confirmed_budget_factor : 1.0;
+    return translation <=
+               factor * std::max(config.drift_floor_m, config.drift_per_metre * travelled) &&
+           degrees <=
+               factor * std::max(config.drift_floor_deg, config.drift_deg_per_metre * travelled);
   };
   for (std::size_t e = 0; e < edges.size(); ++e) {
     if (edges[e].loop) use[e] = within_budget(odometry, e);

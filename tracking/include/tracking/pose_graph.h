@@ -16,6 +16,9 @@ struct PoseGraphEdge {
   Eigen::Isometry3d T_i_j = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
   bool loop = false;  // loop edges get a robust kernel and may be rejected
+  // A loop another detection agrees with (loops_agree()): judged against
+  // PoseGraphConfig::confirmed_budget_factor times the drift budget.
+  bool confirmed = false;
 };
 
 // How loops are accepted. The odometry graph is solved alone first; where its edges are
@@ -27,13 +30,24 @@ struct PoseGraphEdge {
 // drift_per_metre (and drift_deg_per_metre) of the path travelled between its keyframes, both
 // against the odometry and after solving with it; a loop outside it is rejected (a place that
 // only looks like an earlier one) and the graph solved without it. Accepted loops keep a Huber
-// kernel at loop_huber_sigmas.
+// kernel at loop_huber_sigmas. Drift is not always gradual: a frame aligned to a person walking
+// past moves the whole trajectory after it at once. A loop that a second detection confirms
+// (two places, each matched, revealing the same error) is therefore allowed more of it.
 struct PoseGraphConfig {
   int max_iterations = 100;
-  double loop_huber_sigmas = 3.0;
+  // Huber kernels, in standard deviations of each edge's information. Loops: an accepted loop
+  // may still be off by more than its information says, but at 3 a loop revealing a jump of
+  // 20 cm moved the graph by 3 cm. Odometry edges: a jump (a frame aligned to someone walking
+  // past) is left in its own edge rather than spread over the whole path, where gradual drift
+  // (a focal length error) stays spread. docs/tuning.md has the table both were chosen on.
+  double loop_huber_sigmas = 10.0;
+  double odometry_huber_sigmas = 30.0;  // 0: none
   // Ten times the drift the odometry shows on the real sequences (docs/measurements.md).
   double drift_per_metre = 0.1, drift_deg_per_metre = 10.0;
   double drift_floor_m = 0.05, drift_floor_deg = 3.0;  // loops between nearby keyframes
+  // A confirmed loop's budget, in budgets. Look-alike places that repeat (a symmetric pattern
+  // seen twice) reveal errors of a metre and 90 degrees in the generated suite, far outside it.
+  double confirmed_budget_factor = 5.0;
 };
 
 struct PoseGraphResult {
@@ -44,6 +58,12 @@ struct PoseGraphResult {
   double initial_cost = 0, final_cost = 0;  // sums of chi2 (before the variance factor, at the start)
   int iterations = 0;
 };
+
+// Whether loops `a` and `b` reveal the same error in `poses` (camera-to-world, by keyframe): the
+// pose `b` gives its newer keyframe, carried to `a`'s newer keyframe through the poses, is where
+// `a` puts it, within the drift budget for the distances between their keyframes at either end.
+bool loops_agree(const std::vector<Eigen::Isometry3d>& poses, const PoseGraphEdge& a,
+                 const PoseGraphEdge& b, const PoseGraphConfig& config = {});
 
 // The optimal poses given the edges, keeping the poses listed in `fixed` (at least one: the
 // graph has a free gauge otherwise). Throws splat::Error for an edge naming a pose that does not
