@@ -189,6 +189,35 @@ TEST(RunCheckpoint, OverlappedDeviceMappingContinuesExactlyAsTheRunThatNeverStop
           .straight.overlapped);
 }
 
+// Loop closure's memory: confirmed loops keep their wider budget in the graph, and loops waiting
+// for a confirming detection are still waiting after a resume.
+TEST(RunCheckpoint, KeepsConfirmedLoopsAndTheLoopsWaitingForConfirmation) {
+  gslam::test::TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 4;
+  const app::Dataset dataset = gslam::test::synthetic_dataset(dir / "seq", o);
+  auto rasterizer = splat::make_cpu_rasterizer({2});
+  app::SlamSystem slam(*rasterizer, checkpoint_config());
+  for (std::size_t i = 0; i < dataset.entries.size(); ++i) slam.process(dataset.load(i));
+  app::SlamSystem::State state = slam.state();
+  tracking::PoseGraphEdge loop;
+  loop.i = 0, loop.j = 1, loop.loop = true, loop.confirmed = true;
+  state.back_end.edges.push_back(loop);
+  loop.confirmed = false;
+  state.back_end.rejected_loops = {loop};
+  state.loop_events.push_back({30, 2, 28, 0.19, 3.1, true, 25});
+  app::write_run_checkpoint(dir / "loops.bin", {state, {}});
+  const app::SlamSystem::State back = app::read_run_checkpoint(dir / "loops.bin").slam;
+  ASSERT_EQ(back.back_end.edges.size(), state.back_end.edges.size());
+  EXPECT_TRUE(back.back_end.edges.back().confirmed);
+  EXPECT_FALSE(back.back_end.edges.front().confirmed);
+  ASSERT_EQ(back.back_end.rejected_loops.size(), 1u);
+  EXPECT_TRUE(back.back_end.rejected_loops[0].loop);
+  EXPECT_FALSE(back.back_end.rejected_loops[0].confirmed);
+  ASSERT_FALSE(back.loop_events.empty());
+  EXPECT_EQ(back.loop_events.back().confirms_frame, std::optional<std::size_t>(25));
+}
+
 TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
