@@ -185,7 +185,9 @@ int run_cli(int argc, char** argv) {
   recon_cmd->add_flag("--resume", recon.resume, "Continue the interrupted run in --out from its checkpoint");
   recon_cmd->add_flag("--print-config", recon.print_config, "Write the effective SLAM configuration (defaults and --config) as JSON and stop");
   recon_cmd->add_option("--max-frames", recon.dataset_options.max_frames, "Use only the first N frames");
-  recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
+  recon_cmd->add_option("--intrinsics", recon.dataset_options.intrinsics,
+                        "fx,fy,cx,cy, optionally followed by the lens distortion k1,k2,p1,p2[,k3] "
+                        "(overrides the preset)");
   recon_cmd->add_option("--depth-scale", recon.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*recon_cmd, recon.dataset_options);
   add_label_option(*recon_cmd, recon.dataset_options);
@@ -199,7 +201,9 @@ int run_cli(int argc, char** argv) {
   CLI::App* eval_cmd = cli.add_subcommand("eval", "Trajectory and rendering errors of a reconstruct run");
   eval_cmd->add_option("run", eval.run, "Output directory of gslam reconstruct")->required();
   eval_cmd->add_option("--dataset", eval.dataset, "The sequence the run used (with ground truth; default: the one its summary.json names)");
-  eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset)");
+  eval_cmd->add_option("--intrinsics", eval.dataset_options.intrinsics,
+                       "fx,fy,cx,cy, optionally followed by the lens distortion k1,k2,p1,p2[,k3] "
+                       "(overrides the preset)");
   eval_cmd->add_option("--depth-scale", eval.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*eval_cmd, eval.dataset_options);
   add_label_option(*eval_cmd, eval.dataset_options);
@@ -227,7 +231,9 @@ int run_cli(int argc, char** argv) {
   live_cmd->add_option("--max-frames", live.dataset_options.max_frames,
                        "Replay only the first N frames of the recording (frames dropped among them count); with "
                        "--watch, stop after N frames are tracked");
-  live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics, "fx,fy,cx,cy (overrides the preset or intrinsics.txt)");
+  live_cmd->add_option("--intrinsics", live.dataset_options.intrinsics,
+                       "fx,fy,cx,cy, optionally followed by the lens distortion k1,k2,p1,p2[,k3] "
+                       "(overrides the preset or intrinsics.txt)");
   live_cmd->add_option("--depth-scale", live.dataset_options.depth_scale, "Depth units per metre (TUM: 5000)")->check(kPositiveFinite);
   add_topic_options(*live_cmd, live.dataset_options);
   add_label_option(*live_cmd, live.dataset_options);
@@ -313,6 +319,10 @@ int run_cli(int argc, char** argv) {
       ->check(CLI::Range(0.0, 2.0));
   gen_cmd->add_option("--focal-error", seq.focal_error, "intrinsics.txt's focal length off by this fraction")
       ->check(CLI::Range(-0.5, 0.5));
+  gen_cmd->add_option(
+      "--distortion", gen.distortion,
+      "k1,k2,p1,p2[,k3]: the images seen through a lens with this distortion (OpenCV's "
+      "model; TUM fr1: 0.262383,-0.953104,-0.005358,0.002628,1.163314), stated in intrinsics.txt");
   gen_cmd->add_flag("--movers", seq.movers,
                     "People and objects moving through the room: a person walking across, a chair pushed, a crate appearing");
   gen_cmd->add_flag("--walkers", seq.walkers,
@@ -324,7 +334,7 @@ int run_cli(int argc, char** argv) {
     for (const char* flag :
          {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
           "--depth-noise", "--depth-holes", "--depth-lag", "--gain-swing", "--focal-error",
-          "--movers", "--walkers", "--labels", "--seed"}) {
+          "--distortion", "--movers", "--walkers", "--labels", "--seed"}) {
       if (gen.suite && gen_cmd->count(flag) > 0)
         throw CLI::ValidationError(std::string(flag) +
                                    " describes one sequence; --suite writes its own");

@@ -30,7 +30,9 @@ int run_generate(const GenerateOptions& o) {
     throw splat::Error(o.out.string() + ": not empty; give --overwrite to replace what is there");
   }
   if (!o.suite) {
-    write_one(o.out, o.sequence, o.overwrite);
+    SyntheticOptions sequence = o.sequence;
+    if (!o.distortion.empty()) sequence.distortion = parse_lens_distortion(o.distortion);
+    write_one(o.out, sequence, o.overwrite);
     std::printf("generated %d frames (%dx%d) -> %s\n", o.sequence.frames, o.sequence.width, o.sequence.height,
                 o.out.c_str());
     return 0;

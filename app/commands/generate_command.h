@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <string>
 
 #include "datasets/synthetic_sequence.h"
 
@@ -10,6 +11,7 @@ struct GenerateOptions {
   bool suite = false;      // the hard-case suite (synthetic_suite.h), a folder per case
   bool overwrite = false;  // replace what an earlier generate wrote there (nothing else)
   SyntheticOptions sequence;  // one sequence (without `suite`)
+  std::string distortion;     // "k1,k2,p1,p2[,k3]" for sequence.distortion; empty: none
 };
 
 // `gslam generate`: a synthetic RGB-D sequence with exact ground truth in TUM layout

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <vector>
 
 #include "io/slam_config_io.h"
 #include "splat/error.h"
@@ -19,15 +20,27 @@ nlohmann::json run_input_json(const std::filesystem::path& input, const std::str
           {"config", slam_config_to_json(config)}};
 }
 
+nlohmann::json lens_json(const splat::Camera& raw, const LensDistortion& d) {
+  return {{"fx", raw.fx}, {"fy", raw.fy}, {"cx", raw.cx}, {"cy", raw.cy}, {"k1", d.k1},
+          {"k2", d.k2},   {"p1", d.p1},   {"p2", d.p2},   {"k3", d.k3}};
+}
+
 RecordedInput recorded_input(const nlohmann::json& in, const std::string& where) {
   RecordedInput r;
   try {
     r.dataset = in.at("dataset").get<std::string>();
-    const nlohmann::json& k = in.at("intrinsics");
-    char text[160];
-    std::snprintf(text, sizeof(text), "%.17g,%.17g,%.17g,%.17g", k.at("fx").get<double>(), k.at("fy").get<double>(),
-                  k.at("cx").get<double>(), k.at("cy").get<double>());
-    r.options.intrinsics = text;
+    // A distorting lens: the raw camera and its distortion, which undistort the frames again.
+    const bool lens = in.contains("lens");
+    const nlohmann::json& k = lens ? in.at("lens") : in.at("intrinsics");
+    std::vector<const char*> names = {"fx", "fy", "cx", "cy"};
+    if (lens) names.insert(names.end(), {"k1", "k2", "p1", "p2", "k3"});
+    r.options.intrinsics.clear();
+    for (const char* name : names) {
+      char text[40];
+      std::snprintf(text, sizeof(text), "%s%.17g", r.options.intrinsics.empty() ? "" : ",",
+                    k.at(name).get<double>());
+      r.options.intrinsics += text;
+    }
     r.options.depth_scale = in.at("depth_scale").get<double>();
     r.options.max_frames = in.value("max_frames", 0);
     r.options.color_topic = in.value("color_topic", "");

@@ -18,6 +18,9 @@ namespace app {
 // the run.
 nlohmann::json run_input_json(const std::filesystem::path& input, const std::string& format, const splat::Camera& k,
                               double depth_scale, int max_frames, int test_every, const SlamConfig& config);
+// A distorting lens: the raw camera and its distortion ("lens": fx, fy, cx, cy, k1, k2, p1, p2,
+// k3), from which the frames were undistorted into "intrinsics".
+nlohmann::json lens_json(const splat::Camera& raw, const LensDistortion& distortion);
 // With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames").
 inline nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
                                      int test_every, const SlamConfig& config) {
@@ -26,6 +29,8 @@ inline nlohmann::json run_input_json(const std::filesystem::path& input, const D
   if (!dataset.color_topic.empty()) out["color_topic"] = dataset.color_topic;
   if (!dataset.depth_topic.empty()) out["depth_topic"] = dataset.depth_topic;
   if (!dataset.gt_frames.empty()) out["gt_frames"] = dataset.gt_frames;
+  if (dataset.undistortion)
+    out["lens"] = lens_json(dataset.undistortion->raw_camera(), dataset.distortion);
   return out;
 }
 
@@ -37,7 +42,9 @@ inline bool is_held_out(std::size_t frame, int test_every) {
 
 struct RecordedInput {
   std::filesystem::path dataset;
-  DatasetOptions options;  // intrinsics as --intrinsics takes them, depth scale, max frames, a recording's topics
+  // intrinsics as --intrinsics takes them (the raw camera and its distortion for a distorting
+  // lens), depth scale, max frames, a recording's topics
+  DatasetOptions options;
   nlohmann::json config;   // null where the run did not record it
   int test_every = 0;      // held-out test views (is_held_out)
 };

@@ -267,6 +267,8 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
                      " (expected positive, finite); give --intrinsics fx,fy,cx,cy");
     }
     d.intrinsics.fx = k[0], d.intrinsics.fy = k[4], d.intrinsics.cx = k[2], d.intrinsics.cy = k[5];
+    d.distortion = lens_distortion_from_ros(info->distortion_model, info->d,
+                                            path.string() + ": " + info_topic);
   } else {
     fail(path, infos.empty()
                    ? "no sensor_msgs/CameraInfo topic: give --intrinsics fx,fy,cx,cy"

@@ -24,10 +24,12 @@ struct RosImage {
   std::vector<std::uint8_t> data;  // [height, step] rows or the compressed file; empty in an index
 };
 
-// sensor_msgs/CameraInfo: the image size and the 3x3 camera matrix.
+// sensor_msgs/CameraInfo: the image size, the 3x3 camera matrix and the lens distortion.
 struct RosCameraInfo {
   std::uint32_t width = 0, height = 0;
   std::array<double, 9> k{};  // row-major: fx 0 cx, 0 fy cy, 0 0 1
+  std::string distortion_model;  // "plumb_bob", ...
+  std::vector<double> d;         // its coefficients
 };
 
 // One transform of a tf2_msgs/TFMessage (ROS 1's tf/tfMessage alike): the pose of frame

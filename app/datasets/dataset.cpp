@@ -49,15 +49,32 @@ void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
   cam.height = image.height;
 }
 
-// gslam's intrinsics.txt: "fx fy cx cy" in pixels on one line.
-void read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
+// gslam's intrinsics.txt: "fx fy cx cy" in pixels, optionally followed by the lens distortion
+// "k1 k2 p1 p2 [k3]" (OpenCV's order), on one line.
+LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
   std::ifstream in(path);
-  double k[4];
-  if (!(in >> k[0] >> k[1] >> k[2] >> k[3]) || !(k[0] > 0) || !(k[1] > 0) || !std::isfinite(k[0]) ||
-      !std::isfinite(k[1]) || !std::isfinite(k[2]) || !std::isfinite(k[3])) {
-    fail(path, "expected 'fx fy cx cy'");
+  std::string line;
+  std::getline(in, line);
+  std::istringstream words(line);
+  std::vector<double> k;
+  std::string word;
+  // Reads at most 10 words: a longer line is wrong whatever it holds.
+  while (k.size() < 10 && words >> word) {
+    char* end = nullptr;
+    k.push_back(std::strtod(word.c_str(), &end));
+    if (*end != '\0' || !std::isfinite(k.back())) k.back() = std::nan("");
   }
+  const bool ok = (k.size() == 4 || k.size() == 8 || k.size() == 9) && k[0] > 0 && k[1] > 0 &&
+                  std::isfinite(k[2]) && std::isfinite(k[3]);
+  if (!ok)
+    fail(path, "expected 'fx fy cx cy', optionally followed by the distortion 'k1 k2 p1 p2 [k3]'");
   cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
+  if (k.size() == 4) return {};
+  try {
+    return lens_distortion_from({k.begin() + 4, k.end()}, path.string());
+  } catch (const splat::Error& e) {
+    fail(path, "distortion 'k1 k2 p1 p2 [k3]' must be finite numbers under 100");
+  }
 }
 
 // Optional `path` (ROOT/groundtruth.txt, a TUM trajectory) associated with d.entries by timestamp
@@ -83,15 +100,20 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   d.root = root;
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;
   const std::string name = std::filesystem::absolute(root).string();
-  // Calibrated colour intrinsics of the TUM Kinects (TUM RGB-D dataset documentation).
+  // Calibrated colour cameras of the TUM Kinects (TUM RGB-D dataset documentation): fr1's and
+  // fr2's images are raw, with their lens distortion; fr3's are rectified.
   if (!options.intrinsics.empty()) {
-    apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
-    read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
+    d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
   } else if (name.find("freiburg1") != std::string::npos) {
-    d.intrinsics.fx = 517.3, d.intrinsics.fy = 516.5, d.intrinsics.cx = 318.6, d.intrinsics.cy = 255.3;
+    d.intrinsics.fx = 517.306408, d.intrinsics.fy = 516.469215, d.intrinsics.cx = 318.643040,
+    d.intrinsics.cy = 255.313989;
+    d.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
   } else if (name.find("freiburg2") != std::string::npos) {
-    d.intrinsics.fx = 520.9, d.intrinsics.fy = 521.0, d.intrinsics.cx = 325.1, d.intrinsics.cy = 249.7;
+    d.intrinsics.fx = 520.908620, d.intrinsics.fy = 521.007327, d.intrinsics.cx = 325.141442,
+    d.intrinsics.cy = 249.701764;
+    d.distortion = {0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
   } else if (name.find("freiburg3") != std::string::npos) {
     d.intrinsics.fx = 535.4, d.intrinsics.fy = 539.2, d.intrinsics.cx = 320.1, d.intrinsics.cy = 247.6;
   } else {
@@ -142,7 +164,7 @@ Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& op
   d.root = root;
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 6553.5;
   if (!options.intrinsics.empty()) {
-    apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
   } else {
     d.intrinsics.fx = d.intrinsics.fy = 600.0;
     d.intrinsics.cx = 599.5;
@@ -236,9 +258,9 @@ Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder
   d.root = root;
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;  // as TUM and --watch
   if (!options.intrinsics.empty()) {
-    apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
-    read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
+    d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
   } else {
     fail(root / "intrinsics.txt",
          "not found: a folder of images (rgb/, depth/) needs the camera, 'fx fy cx cy' in "
@@ -392,6 +414,7 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
     splat::RgbdFrame f = store->load(i, intrinsics, depth_scale);
     f.timestamp = e.timestamp;
     f.depth_time_offset = e.depth_offset;
+    if (undistortion) undistortion->apply(f);
     return f;
   }
   const splat::Image8 rgb = read_rgb8(e.rgb);
@@ -422,29 +445,43 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
       }
     }
   }
+  if (undistortion) undistortion->apply(f);
   return f;
 }
 
-void apply_intrinsics(splat::Camera& cam, const std::string& text) {
+LensDistortion apply_intrinsics(splat::Camera& cam, const std::string& text) {
   std::stringstream ss(text);
   std::vector<double> v;
-  for (std::string item; std::getline(ss, item, ',');) {
+  for (std::string item; v.size() < 10 && std::getline(ss, item, ',');) {
     char* end = nullptr;
     v.push_back(std::strtod(item.c_str(), &end));
     if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.clear(), v.push_back(-1);
   }
-  if (v.size() != 4 || v[0] <= 0 || v[1] <= 0) throw splat::Error("intrinsics '" + text + "': expected fx,fy,cx,cy");
+  if ((v.size() != 4 && v.size() != 8 && v.size() != 9) || v[0] <= 0 || v[1] <= 0) {
+    throw splat::Error(
+        "intrinsics '" + text +
+        "': expected fx,fy,cx,cy, optionally followed by the distortion k1,k2,p1,p2[,k3]");
+  }
   cam.fx = v[0];
   cam.fy = v[1];
   cam.cx = v[2];
   cam.cy = v[3];
+  if (v.size() == 4) return {};
+  return lens_distortion_from({v.begin() + 4, v.end()}, "intrinsics '" + text + "'");
 }
 
-splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb) {
-  splat::Camera cam;
-  apply_intrinsics(cam, intrinsics);
-  set_size_from(cam, rgb);
-  return cam;
+void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std::string& where) {
+  d.distortion = distortion;
+  d.undistortion.reset();
+  if (!distortion.any()) return;
+  d.undistortion = std::make_shared<const Undistortion>(d.intrinsics, distortion, where);
+  d.intrinsics = d.undistortion->camera();
+}
+
+void set_camera(Dataset& d, const std::string& intrinsics, const std::filesystem::path& rgb) {
+  const LensDistortion distortion = apply_intrinsics(d.intrinsics, intrinsics);
+  set_size_from(d.intrinsics, rgb);
+  set_lens_distortion(d, distortion, "intrinsics '" + intrinsics + "'");
 }
 
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options) {
@@ -457,7 +494,8 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   Dataset d;
   if (recording) {
     d = open_bag(root, options);
-    if (!options.intrinsics.empty()) apply_intrinsics(d.intrinsics, options.intrinsics);
+    if (!options.intrinsics.empty())
+      d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
     if (options.gt_frames.empty()) attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
   } else if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
     d = open_tum(root, options);
@@ -489,6 +527,7 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
     d.entries.resize(static_cast<std::size_t>(options.max_frames));
   }
   if (!d.store) set_size_from(d.intrinsics, d.entries.front().rgb);
+  set_lens_distortion(d, d.distortion, root.string() + " (the camera's lens distortion)");
   // Label images: named, or labels/ beside the colour folder.
   if (d.store && !options.labels.empty()) fail(options.labels, "label images are read for dataset folders, not recordings");
   if (!options.labels.empty()) {

@@ -1,19 +1,21 @@
 #pragma once
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "datasets/label_images.h"
+#include "datasets/lens_distortion.h"
 #include "splat/rgbd_frame.h"
 
 namespace app {
 
 struct DatasetOptions {
-  std::string intrinsics;   // "fx,fy,cx,cy" overrides the preset (image size from the files)
+  // "fx,fy,cx,cy[,k1,k2,p1,p2[,k3]]" overrides the preset (image size from the files); with
+  // distortion coefficients the frames are undistorted as they load.
+  std::string intrinsics;
   double depth_scale = 0;   // stored value per metre; 0 = the format's default
   int max_frames = 0;       // 0 = all
   std::string color_topic;  // ROS recordings: the colour and depth image topics (default: found
@@ -46,7 +48,11 @@ class FrameStore {
 struct Dataset {
   std::string format;  // "tum" (the plain folder too), "images", "replica", "rosbag", "mcap"; "watched" for live --watch
   std::filesystem::path root;  // the folder, or the recording file
-  splat::Camera intrinsics; // pose unused
+  // The pinhole camera that load() gives frames in (pose unused): the camera's own, or, when its
+  // lens distorts (`distortion`), the one `undistortion` resamples the frames into.
+  splat::Camera intrinsics;
+  LensDistortion distortion;  // of the raw images; none for rectified ones
+  std::shared_ptr<const Undistortion> undistortion;
   double depth_scale = 5000;
   std::vector<DatasetEntry> entries;  // in a recording, rgb and depth both name the file
   std::shared_ptr<const FrameStore> store;  // set for recordings: their frames' pixels
@@ -78,16 +84,22 @@ struct Dataset {
   bool has_ground_truth() const;
 };
 
-// Sets the camera's fx, fy, cx, cy from "fx,fy,cx,cy"; throws splat::Error naming the text.
-void apply_intrinsics(splat::Camera& camera, const std::string& intrinsics);
-// Intrinsics "fx,fy,cx,cy" with the image size of the colour image `rgb`. Throws splat::Error
-// naming the text or the file.
-splat::Camera camera_for(const std::string& intrinsics, const std::filesystem::path& rgb);
+// Sets the camera's fx, fy, cx, cy from "fx,fy,cx,cy" and returns the lens distortion that may
+// follow ("fx,fy,cx,cy,k1,k2,p1,p2[,k3]"; none without); throws splat::Error naming the text.
+LensDistortion apply_intrinsics(splat::Camera& camera, const std::string& intrinsics);
+// Where `distortion` is some: sets d.distortion and d.undistortion from d.intrinsics (sized),
+// and d.intrinsics to the pinhole camera the frames load in. `where` names the camera's source.
+void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std::string& where);
+// d's camera from "fx,fy,cx,cy[,k1,k2,p1,p2[,k3]]", sized as the colour image `rgb`. Throws
+// splat::Error naming the text or the file.
+void set_camera(Dataset& d, const std::string& intrinsics, const std::filesystem::path& rgb);
 
 // Opens a dataset folder, detecting its format: TUM RGB-D (rgb.txt, depth.txt, optional
-// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name), the plain folder (the
-// same lists plus intrinsics.txt "fx fy cx cy"), a folder of images without lists ("images":
-// rgb/NAME.{png,jpg,jpeg} + depth/NAME.png paired by identical stem NAME, intrinsics.txt or
+// groundtruth.txt; intrinsics preset from freiburg1/2/3 in the folder name, with the fr1 and fr2
+// Kinects' lens distortion), the plain folder (the same lists plus intrinsics.txt "fx fy cx cy",
+// optionally followed by distortion "k1 k2 p1 p2 [k3]"), a folder of images without lists
+// ("images": rgb/NAME.{png,jpg,jpeg} + depth/NAME.png paired by identical stem NAME, intrinsics.txt
+// or
 // --intrinsics, optional groundtruth.txt, depth / 5000 by default; numeric stems are timestamps in
 // seconds and ordered as numbers, otherwise frames are in name order stamped index / 30 s), or
 // Replica as used by NICE-SLAM/SplaTAM (results/frameNNNNNN.jpg, results/depthNNNNNN.png / 6553.5,

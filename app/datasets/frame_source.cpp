@@ -232,7 +232,7 @@ class WatchSource final : public ThreadedSource {
         entry.depth = dir_ / "depth" / (name + ".png");
         if (dataset_.entries.empty()) {
           std::lock_guard lock(intrinsics_mutex_);
-          dataset_.intrinsics = camera_for(options_.intrinsics, entry.rgb);
+          set_camera(dataset_, options_.intrinsics, entry.rgb);
         }
         dataset_.entries = {entry};
         mailbox_.put({dataset_.load(0), Clock::now(), std::nullopt});

@@ -168,11 +168,11 @@ RosCameraInfo parse_camera_info(std::span<const std::uint8_t> bytes, bool ros1) 
   RosCameraInfo info;
   info.height = c.number<std::uint32_t>("height");
   info.width = c.number<std::uint32_t>("width");
-  c.string("distortion_model");
+  info.distortion_model = c.string("distortion_model");
   const std::uint32_t d = c.number<std::uint32_t>("d length");
   if (d > 64)
     throw Malformed{"d has " + std::to_string(d) + " distortion coefficients (at most 64)"};
-  for (std::uint32_t i = 0; i < d; ++i) c.number<double>("d");
+  for (std::uint32_t i = 0; i < d; ++i) info.d.push_back(c.number<double>("d"));
   for (double& k : info.k) k = c.number<double>("k");
   return info;
 }

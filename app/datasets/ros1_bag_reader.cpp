@@ -142,6 +142,8 @@ class Ros1BagReader final : public BagReader {
         out->width = info->width;
         out->height = info->height;
         for (int i = 0; i < 9; ++i) out->k[std::size_t(i)] = info->K[std::size_t(i)];
+        out->distortion_model = info->distortion_model;
+        out->d.assign(info->D.begin(), info->D.end());
         break;
       }
     });

@@ -317,6 +317,27 @@ SyntheticOptions SyntheticOptions::hard_motion() {
   return o;
 }
 
+namespace {
+
+// Each pixel's viewing direction (x / z, y / z) through the lens, at its 4 colour supersamples and
+// then its centre (sample 4).
+std::vector<Eigen::Vector2d> lens_directions(const SyntheticOptions& o, double cx, double cy) {
+  std::vector<Eigen::Vector2d> at;
+  at.reserve(static_cast<std::size_t>(o.width) * o.height * 5);
+  for (int y = 0; y < o.height; ++y) {
+    for (int x = 0; x < o.width; ++x) {
+      for (int s = 0; s < 4; ++s) {
+        at.emplace_back((x + 0.25 + 0.5 * (s % 2) - cx) / o.focal,
+                        (y + 0.25 + 0.5 * (s / 2) - cy) / o.focal);
+      }
+      at.emplace_back((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal);
+    }
+  }
+  return o.distortion.any() ? undistort_normalized(o.distortion, at) : at;
+}
+
+}  // namespace
+
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
   if (o.frames < 1 || o.width < 8 || o.height < 8)
     throw splat::Error("synthetic sequence: bad size or frame count");
@@ -343,6 +364,11 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::vector<StampedPose> truth;
   std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";
   const double cx = o.width / 2.0, cy = o.height / 2.0;
+  const std::vector<Eigen::Vector2d> lens = lens_directions(o, cx, cy);
+  const auto direction = [&](int x, int y, int sample) {
+    const Eigen::Vector2d& n = lens[(static_cast<std::size_t>(y) * o.width + x) * 5 + sample];
+    return Vector3d(n.x(), n.y(), 1.0);
+  };
   for (int f = 0; f < o.frames; ++f) {
     const double seconds = f / o.fps, timestamp = 1000.0 + seconds;
     const Eigen::Isometry3d pose = camera_pose(o, seconds);  // mid-exposure: the ground truth
@@ -364,7 +390,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         const double weight = 0.25 / static_cast<double>(instants.size());
         for (const auto& [at, at_seconds] : instants) {
           for (int s = 0; s < 4; ++s) {
-            const Vector3d dir_cam((x + 0.25 + 0.5 * (s % 2) - cx) / o.focal, (y + 0.25 + 0.5 * (s / 2) - cy) / o.focal, 1.0);
+            const Vector3d dir_cam = direction(x, y, s);
             Hit hit;
             trace(scene, o, at.translation(), (at.linear() * dir_cam).normalized(), at_seconds, hit);
             if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));
@@ -386,7 +412,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     for (int y = 0; y < o.height; ++y) {
       for (int x = 0; x < o.width; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
-        const Vector3d ray = (depth_pose.linear() * Vector3d((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal, 1.0)).normalized();
+        const Vector3d ray = (depth_pose.linear() * direction(x, y, 4)).normalized();
         Hit hit;
         trace(scene, o, depth_pose.translation(), ray, o.depth_lag > 0 ? depth_seconds : seconds, hit);
         if (!std::isfinite(hit.t)) continue;
@@ -427,8 +453,14 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   write_text(dir / "depth.txt", depth_list);
   char intrinsics[128];
   const double stated = o.focal * (1 + o.focal_error);
-  std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f\n", stated, stated, cx, cy);
-  write_text(dir / "intrinsics.txt", intrinsics);
+  std::snprintf(intrinsics, sizeof(intrinsics), "%.6f %.6f %.6f %.6f", stated, stated, cx, cy);
+  std::string intrinsics_line = intrinsics;
+  for (double k : o.distortion.any() ? o.distortion.coefficients() : std::vector<double>{}) {
+    std::snprintf(intrinsics, sizeof(intrinsics), " %.9g", k);
+    intrinsics_line += intrinsics;
+  }
+  intrinsics_line += "\n";
+  write_text(dir / "intrinsics.txt", intrinsics_line);
   write_tum_trajectory(dir / "groundtruth.txt", truth);
   if (!o.labels) return;
   write_text(dir / "labels" / "classes.json", R"({"classes": [

@@ -1,8 +1,9 @@
 #pragma once
+#include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
 
-#include <Eigen/Core>
+#include "datasets/lens_distortion.h"
 
 namespace app {
 
@@ -16,6 +17,9 @@ struct SyntheticOptions {
   // A calibration error: intrinsics.txt says focal * (1 + focal_error), the images use focal.
   // Odometry then drifts as it does on real cameras, systematically.
   double focal_error = 0;
+  // A lens that distorts (TUM's fr1 and fr2 Kinects): the images are seen through it, and
+  // intrinsics.txt states it after the focal length and principal point.
+  LensDistortion distortion;
   double fps = 30;
   // 0: an arc through the room. N > 0: N laps of a circle about the room's middle, looking across
   // it, so the camera returns to where it began (loop closure's test).

@@ -32,6 +32,16 @@ std::vector<SyntheticCase> hard_case_suite() {
   add("blur_and_holes", "200 frames, 3 rad/s, 1/30 s exposure, Kinect noise, 15% holes", o);
 
   o = SyntheticOptions{};
+  o.frames = 200;
+  o.shake_peak_rate = 1.0;
+  o.depth_noise = 0.0015;
+  o.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  add("lens_distortion",
+      "200 frames, 1 rad/s, Kinect noise, raw images through TUM fr1's lens (intrinsics.txt states "
+      "it)",
+      o);
+
+  o = SyntheticOptions{};
   o.frames = 300;
   o.laps = 1;
   o.focal_error = 0.01;

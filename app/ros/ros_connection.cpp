@@ -299,6 +299,8 @@ void Connection::start(const ConnectionOptions& options, std::function<void(Rgbd
         out.width = info->width;
         out.height = info->height;
         std::copy(info->K.begin(), info->K.end(), out.k.begin());
+        out.distortion_model = info->distortion_model;
+        out.d.assign(info->D.begin(), info->D.end());
         camera_info(out);
       });
   m.save_srv = pnh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(

@@ -49,8 +49,9 @@ std::optional<ArrivedFrame> RosFrameSource::next(std::chrono::milliseconds timeo
   queue_.pop_front();
   ++delivered_;
   if (camera_.width == 0) {  // the first frame: the camera, sized as its images
+    LensDistortion distortion;
     if (known) {
-      apply_intrinsics(camera_, fixed_intrinsics_);
+      distortion = apply_intrinsics(camera_, fixed_intrinsics_);
     } else {
       const auto& k = info_->k;
       camera_.fx = k[0], camera_.fy = k[4], camera_.cx = k[2], camera_.cy = k[5];
@@ -58,19 +59,26 @@ std::optional<ArrivedFrame> RosFrameSource::next(std::chrono::milliseconds timeo
         throw splat::Error("rgb/camera_info: K has fx " + std::to_string(camera_.fx) + ", fy " +
                            std::to_string(camera_.fy) + " (an uncalibrated camera?): set ~intrinsics fx,fy,cx,cy");
       }
+      distortion = lens_distortion_from_ros(info_->distortion_model, info_->d, "rgb/camera_info");
     }
     camera_.width = static_cast<int>(m.colour.width);
     camera_.height = static_cast<int>(m.colour.height);
     camera_.validate("rgb/image");
+    if (distortion.any()) {
+      undistortion_ = std::make_shared<const Undistortion>(camera_, distortion, "rgb/camera_info");
+      camera_ = undistortion_->camera();
+    }
   }
   frame_id_ = m.frame_id;
   depth_scale_ = fixed_depth_scale_ > 0 ? fixed_depth_scale_ : default_depth_scale(m.depth);
   const splat::Camera camera = camera_;
+  const std::shared_ptr<const Undistortion> undistortion = undistortion_;
   const double depth_scale = depth_scale_;
   lock.unlock();
   ArrivedFrame out{rgbd_frame_from_ros(m.colour, m.depth, camera, depth_scale, "rgb/image (" + m.colour.encoding + ")",
                                        "depth/image (" + m.depth.encoding + ")"),
                    m.arrived, std::nullopt};
+  if (undistortion) undistortion->apply(out.frame);
   out.frame.timestamp = m.colour.stamp;
   out.frame.depth_time_offset = m.depth.stamp - m.colour.stamp;  // paired within sync_slop
   return out;

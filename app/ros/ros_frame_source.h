@@ -6,18 +6,21 @@
 #pragma once
 #include <condition_variable>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 
 #include "datasets/frame_source.h"
+#include "datasets/lens_distortion.h"
 #include "ros/ros_connection.h"
 
 namespace app {
 
 class RosFrameSource final : public FrameSource {
  public:
-  // `intrinsics` "fx,fy,cx,cy" (the size comes with the first frame) or empty for CameraInfo;
+  // `intrinsics` "fx,fy,cx,cy[,k1,k2,p1,p2,k3]" (the size comes with the first frame) or empty for
+  // CameraInfo (its plumb_bob distortion too); distorted frames are undistorted as they are taken;
   // depth_scale 0: by the depth encoding. `alive` says whether ROS is still running.
   RosFrameSource(std::string topics, const std::string& intrinsics, double depth_scale, int queue_size,
                  std::function<bool()> alive);
@@ -47,7 +50,8 @@ class RosFrameSource final : public FrameSource {
   std::condition_variable ready_;
   std::deque<ros1::RgbdMessages> queue_;
   std::optional<RosCameraInfo> info_;
-  splat::Camera camera_;  // zero until a frame is taken
+  splat::Camera camera_;  // zero until a frame is taken; the pinhole camera frames come out in
+  std::shared_ptr<const Undistortion> undistortion_;  // set where the lens distorts
   std::string frame_id_;
   double depth_scale_ = 0;
   bool stopped_ = false;

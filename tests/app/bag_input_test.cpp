@@ -116,6 +116,7 @@ struct McapSpec {
   bool tf = false;     // mocap() on /tf and the mount on /tf_static
   bool chunks = true;  // false: messages at the top level of the file
   int frames = kFrames;
+  std::vector<double> distortion = {0, 0, 0, 0, 0};  // CameraInfo's plumb_bob d
 };
 
 // Writes the first spec.frames teddy frames with the reference writer to `out`.
@@ -141,7 +142,11 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
            << "]}";
   }
   std::ostringstream k;
+  k << std::setprecision(17);
   for (std::size_t i = 0; i < 9; ++i) k << (i ? "," : "") << kTeddyK[i];
+  k << R"(], "d": [)";
+  for (std::size_t i = 0; i < spec.distortion.size(); ++i)
+    k << (i ? "," : "") << spec.distortion[i];
   std::ostringstream tf;
   tf << std::setprecision(17);
   if (spec.tf) {
@@ -179,9 +184,10 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
   std::filesystem::remove_all(raw);
 }
 
-app::Dataset open_teddy(int frames) {
+app::Dataset open_teddy(int frames, const std::string& intrinsics = "") {
   app::DatasetOptions o;
   o.max_frames = frames;
+  o.intrinsics = intrinsics;
   return app::open_dataset(gslam::test::shared_data(kTeddy), o);
 }
 
@@ -312,6 +318,23 @@ TEST_F(McapInput, CompressedPngColourWithoutChunksDecodesAsTheFile) {
   spec.frames = 3;
   write_teddy_mcap(folder, spec, dir / "teddy.mcap");
   expect_same_frames(folder, app::open_dataset(dir / "teddy.mcap"), 3);
+}
+
+// A CameraInfo with plumb_bob distortion: frames come undistorted into a pinhole camera, as a
+// folder given the same camera and distortion gives them.
+TEST_F(McapInput, CameraInfoDistortionUndistortsTheFrames) {
+  TempDir dir;
+  McapSpec spec;
+  spec.frames = 2;
+  spec.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};  // TUM's fr1 Kinect
+  write_teddy_mcap(open_teddy(2), spec, dir / "lens.mcap");
+  const app::Dataset bag = app::open_dataset(dir / "lens.mcap");
+  EXPECT_EQ(bag.distortion.coefficients(), spec.distortion);
+  ASSERT_TRUE(bag.undistortion);
+  EXPECT_GT(bag.intrinsics.fx, kTeddyK[0]) << "the pinhole view inside the raw one";
+  expect_same_frames(
+      open_teddy(2, "535.4,539.2,320.1,247.6,0.262383,-0.953104,-0.005358,0.002628,1.163314"), bag,
+      2);
 }
 
 TEST_F(McapInput, Lz4ChunksAnd16BitDepth) {
@@ -492,6 +515,31 @@ TEST_F(Ros1BagInput, TopicsFoundByTypeOrNamed) {
   const app::Dataset d = app::open_dataset(dir / "camera.bag", o);
   EXPECT_EQ(d.color_topic, "/camera/rgb/image_color");
   expect_same_frames(folder, d, 2);
+#endif
+}
+
+TEST_F(Ros1BagInput, CameraInfoDistortionUndistortsTheFrames) {
+#ifdef GSLAM_HAVE_ROS1
+  TempDir dir;
+  const app::Dataset folder = open_teddy(1);
+  const std::vector<double> fr1 = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  {
+    gslam::test::Ros1BagWriter bag((dir / "lens.bag").string());
+    const app::DatasetEntry& e = folder.entries.front();
+    const splat::RgbdFrame f = folder.load(0);
+    const auto ct = ros_time(e.rgb), dt = ros_time(e.depth);
+    bag.camera_info("/camera/rgb/camera_info", ct[0], ct[1], 640, 480, kTeddyK, fr1);
+    bag.image("/camera/rgb/image_color", ct[0], ct[1], "rgb8", 640, 480, 640 * 3,
+              colour_bytes(f, false));
+    bag.image("/camera/depth/image", dt[0], dt[1], "32FC1", 640, 480, 640 * 4,
+              float_bytes(f.depth));
+    bag.close();
+  }
+  const app::Dataset bag = app::open_dataset(dir / "lens.bag");
+  EXPECT_EQ(bag.distortion.coefficients(), fr1);
+  expect_same_frames(
+      open_teddy(1, "535.4,539.2,320.1,247.6,0.262383,-0.953104,-0.005358,0.002628,1.163314"), bag,
+      1);
 #endif
 }
 

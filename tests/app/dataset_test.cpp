@@ -1,14 +1,17 @@
+#include "datasets/dataset.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 
-#include <gtest/gtest.h>
-
-#include "datasets/dataset.h"
-#include "commands/evaluation.h"
-#include "io/image_io.h"
 #include "app/run_gslam.h"
+#include "commands/evaluation.h"
+#include "commands/run_input.h"
 #include "datasets/synthetic_sequence.h"
+#include "io/image_io.h"
 #include "splat/se3.h"
 #include "support/expect_error.h"
 #include "support/temp_dir.h"
@@ -76,6 +79,78 @@ TEST(TumDataset, UnknownCameraAndBadFoldersAreErrors) {
   app::DatasetOptions options;
   options.intrinsics = "500,500,320,240";
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "mystery", options), "no frame has both colour and depth");
+}
+
+// TUM's fr1 and fr2 images are raw: their presets carry the Kinects' lens distortion, and frames
+// load undistorted into a pinhole camera; fr3's are rectified (see RealSequence... above).
+TEST(TumDataset, Fr1AndFr2PresetsUndistortTheirKinectsLens) {
+  TempDir dir;
+  for (const char* camera : {"freiburg1", "freiburg2"}) {
+    // Two 640x480 frames (the size the calibration is for), a plain grey room 2 m away.
+    const std::filesystem::path seq = dir / (std::string("rgbd_dataset_") + camera + "_desk");
+    std::filesystem::create_directories(seq / "rgb");
+    std::filesystem::create_directories(seq / "depth");
+    splat::Image16 depth(640, 480, 1);
+    std::fill(depth.data.begin(), depth.data.end(), uint16_t{10000});
+    for (const char* stamp : {"1.000000", "1.033333"}) {
+      app::write_png_rgb(seq / "rgb" / (std::string(stamp) + ".png"), 640, 480,
+                         std::vector<float>(640 * 480 * 3, 0.5f));
+      app::write_png_gray16(seq / "depth" / (std::string(stamp) + ".png"), depth);
+    }
+    gslam::test::write_text(seq / "rgb.txt",
+                            "1.000000 rgb/1.000000.png\n1.033333 rgb/1.033333.png\n");
+    gslam::test::write_text(seq / "depth.txt",
+                            "1.000000 depth/1.000000.png\n1.033333 depth/1.033333.png\n");
+    const app::Dataset d = app::open_dataset(seq);
+    EXPECT_DOUBLE_EQ(d.distortion.k1, camera[8] == '1' ? 0.262383 : 0.231222) << camera;
+    ASSERT_TRUE(d.undistortion) << camera;
+    EXPECT_DOUBLE_EQ(d.undistortion->raw_camera().fx, camera[8] == '1' ? 517.306408 : 520.908620);
+    EXPECT_DOUBLE_EQ(d.intrinsics.fx, d.undistortion->camera().fx);
+    const splat::RgbdFrame f = d.load(1);
+    EXPECT_DOUBLE_EQ(f.camera.fx, d.intrinsics.fx) << "frames come in the pinhole camera";
+    EXPECT_DOUBLE_EQ(f.camera.cy, d.intrinsics.cy);
+    EXPECT_TRUE(std::all_of(f.depth.begin(), f.depth.end(), [](float z) { return z == 2.0f; }))
+        << "every pixel of the pinhole view has the raw view's depth";
+    // Given intrinsics replace the preset, distortion included.
+    app::DatasetOptions options;
+    options.intrinsics = "500,500,320,240";
+    const app::Dataset given = app::open_dataset(seq, options);
+    EXPECT_FALSE(given.distortion.any());
+    EXPECT_FALSE(given.undistortion);
+    EXPECT_DOUBLE_EQ(given.intrinsics.fx, 500);
+  }
+}
+
+// intrinsics.txt and --intrinsics may follow the camera with its distortion; a run records the
+// raw camera and the distortion, so that eval and --resume undistort the frames alike.
+TEST(Dataset, IntrinsicsMayStateTheLensDistortionAndRunsRecordIt) {
+  TempDir dir;
+  write_small_sequence(dir / "seq");
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt",
+                          "52 52 32 24 0.1 -0.2 0.001 0.002 0.05\n");
+  const app::Dataset d = app::open_dataset(dir / "seq");
+  EXPECT_EQ(d.distortion.coefficients(), (std::vector<double>{0.1, -0.2, 0.001, 0.002, 0.05}));
+  ASSERT_TRUE(d.undistortion);
+  EXPECT_NE(d.intrinsics.fx, 52) << "the pinhole camera of the undistorted frames";
+
+  const app::RecordedInput recorded = app::recorded_input(
+      app::run_input_json(dir / "seq", d, 0, 0, app::SlamConfig{}), "summary.json");
+  const app::Dataset again = app::open_dataset(dir / "seq", recorded.options);
+  EXPECT_EQ(again.distortion.coefficients(), d.distortion.coefficients());
+  EXPECT_DOUBLE_EQ(again.intrinsics.fx, d.intrinsics.fx);
+  EXPECT_DOUBLE_EQ(again.intrinsics.cx, d.intrinsics.cx);
+
+  app::DatasetOptions options;
+  options.intrinsics = "52,52,32,24,0.1,-0.2,0.001,0.002";
+  EXPECT_DOUBLE_EQ(app::open_dataset(dir / "seq", options).distortion.p2, 0.002)
+      << "k3 may be left out";
+  options.intrinsics = "52,52,32,24,0.1,-0.2";
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq", options), "intrinsics '52,52,32,24,0.1,-0.2'",
+                     "k1,k2,p1,p2[,k3]");
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt", "52 52 32 24 0.1 -0.2\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "'k1 k2 p1 p2 [k3]'");
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt", "52 52 32 24 0.1 -0.2 0 0 1e300\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "under 100");
 }
 
 // A folder matching no layout: one line naming every layout and what this folder lacks.

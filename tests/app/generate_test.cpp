@@ -33,6 +33,22 @@ TEST(CliGenerate, WritesASequenceThatReadsBackWithItsGroundTruth) {
   EXPECT_GT(holes, 0u) << "--depth-holes leaves pixels without depth";
 }
 
+TEST(CliGenerate, DistortionIsSeenThroughAndStatedInIntrinsics) {
+  TempDir dir;
+  const RunResult r = run_gslam("generate " + (dir / "seq").string() +
+                                " --frames 2 --width 40 --height 30 --distortion 0.1,-0.2,0.001,0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const app::Dataset d = app::open_dataset(dir / "seq", {});
+  EXPECT_EQ(d.distortion.coefficients(), (std::vector<double>{0.1, -0.2, 0.001, 0, 0}));
+  EXPECT_TRUE(d.undistortion);
+  const RunResult bad =
+      run_gslam("generate " + (dir / "bad").string() + " --frames 2 --distortion 0.1");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(bad.output,
+            "error: distortion '0.1': expected 4 or 5 finite distortion coefficients "
+            "k1,k2,p1,p2[,k3], got 1\n");
+}
+
 TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
   TempDir dir;
   const std::string out = (dir / "seq").string();
@@ -74,7 +90,8 @@ TEST(SyntheticSuite, CoversTheHardCases) {
   const std::vector<app::SyntheticCase> suite = app::hard_case_suite();
   std::set<std::string> names;
   bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
-       long_one = false, moving = false, walking = false, unsynced = false, exposure = false;
+       long_one = false, moving = false, walking = false, unsynced = false, exposure = false,
+       lens = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -87,9 +104,10 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     walking |= c.options.walkers && !c.options.labels;
     unsynced |= c.options.depth_lag > 0;
     exposure |= c.options.gain_swing > 0;
+    lens |= c.options.distortion.any();
   }
   EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && walking &&
-              unsynced && exposure);
+              unsynced && exposure && lens);
 }
 
 }  // namespace

@@ -103,7 +103,7 @@ for (const [i, f] of manifest.frames.entries()) {
     const k = manifest.k;
     await publish(manifest.info_topic, f.colour_stamp, {
       header: headerOf(f.colour_stamp, "rgb"), height, width, distortion_model: "plumb_bob",
-      d: [0, 0, 0, 0, 0], k, r: [1, 0, 0, 0, 1, 0, 0, 0, 1],
+      d: manifest.d ?? [0, 0, 0, 0, 0], k, r: [1, 0, 0, 0, 1, 0, 0, 0, 1],
       p: [k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
       roi: { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false },
     });

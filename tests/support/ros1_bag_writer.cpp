@@ -34,14 +34,14 @@ void Ros1BagWriter::image(const std::string& topic, std::uint32_t sec, std::uint
 
 void Ros1BagWriter::camera_info(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
                                 std::uint32_t width, std::uint32_t height,
-                                const std::array<double, 9>& k) {
+                                const std::array<double, 9>& k, const std::vector<double>& d) {
   sensor_msgs::CameraInfo m;
   m.header.stamp = ros::Time(sec, nsec);
   m.header.frame_id = "camera";
   m.width = width;
   m.height = height;
   m.distortion_model = "plumb_bob";
-  m.D = {0, 0, 0, 0, 0};
+  m.D = d;
   for (std::size_t i = 0; i < 9; ++i) m.K[i] = k[i];
   impl_->bag.write(topic, m.header.stamp, m);
 }

@@ -19,8 +19,10 @@ class Ros1BagWriter {
   void image(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
              const std::string& encoding, std::uint32_t width, std::uint32_t height,
              std::uint32_t step, const std::vector<std::uint8_t>& data);
+  // plumb_bob distortion d (zeros: a rectified camera).
   void camera_info(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
-                   std::uint32_t width, std::uint32_t height, const std::array<double, 9>& k);
+                   std::uint32_t width, std::uint32_t height, const std::array<double, 9>& k,
+                   const std::vector<double>& d = {0, 0, 0, 0, 0});
   // A tf2_msgs/TFMessage with one transform: child's pose in parent (t: x y z, q: x y z w).
   void transform(const std::string& topic, std::uint32_t sec, std::uint32_t nsec,
                  const std::string& parent, const std::string& child,

@@ -1,0 +1,144 @@
+// Lens distortion: raw frames resampled into a pinhole camera, checked against the distortion
+// model written out here (independently of OpenCV, which does the resampling).
+#include "datasets/lens_distortion.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "splat/error.h"
+#include "support/expect_error.h"
+
+namespace {
+
+const app::LensDistortion kFr1{0.262383, -0.953104, -0.005358, 0.002628,
+                               1.163314};  // TUM's fr1 Kinect
+
+// The model: normalized undistorted (x, y) to normalized distorted.
+Eigen::Vector2d distort(const app::LensDistortion& d, double x, double y) {
+  const double r2 = x * x + y * y, radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  return {x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x),
+          y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y};
+}
+
+splat::Camera raw_camera() {
+  splat::Camera c;
+  c.fx = 260, c.fy = 259, c.cx = 161.3, c.cy = 118.7;
+  c.width = 320, c.height = 240;
+  return c;
+}
+
+// Where pinhole pixel (i, j) of `pinhole` looks in the raw image, in our pixel coordinates
+// (centres at +0.5).
+Eigen::Vector2d raw_position(const splat::Camera& raw, const splat::Camera& pinhole,
+                             const app::LensDistortion& d, int i, int j) {
+  const Eigen::Vector2d n =
+      distort(d, (i + 0.5 - pinhole.cx) / pinhole.fx, (j + 0.5 - pinhole.cy) / pinhole.fy);
+  return {raw.fx * n.x() + raw.cx, raw.fy * n.y() + raw.cy};
+}
+
+// A smooth raw colour (bilinear interpolation is exact to about 1e-3 on it) and a blocky raw
+// depth (16 px blocks, each its own value).
+double raw_colour(double u, double v) {
+  return 0.5 + 0.4 * std::sin(0.05 * u) * std::cos(0.07 * v);
+}
+float block_depth(int x, int y) {
+  return 1.0f + 0.1f * static_cast<float>(x / 16) + 0.01f * static_cast<float>(y / 16);
+}
+
+TEST(Undistortion, ResamplesARawFrameIntoAPinholeCameraThatSeesOnlyTheRawView) {
+  const splat::Camera raw = raw_camera();
+  const app::Undistortion undistortion(raw, kFr1, "test");
+  const splat::Camera& pinhole = undistortion.camera();
+  EXPECT_EQ(pinhole.width, raw.width);
+  EXPECT_EQ(pinhole.height, raw.height);
+  // fr1's lens stretches the corners outwards: the pinhole camera that sees only the raw view
+  // zooms in a little.
+  EXPECT_GT(pinhole.fx, raw.fx);
+  EXPECT_LT(pinhole.fx, raw.fx * 1.15);
+
+  splat::RgbdFrame f;
+  f.camera = raw;
+  const int w = raw.width, h = raw.height;
+  f.rgb.resize(static_cast<std::size_t>(w) * h * 3);
+  f.depth.resize(static_cast<std::size_t>(w) * h);
+  std::set<float> raw_depths;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      for (int c = 0; c < 3; ++c)
+        f.rgb[i * 3 + c] = static_cast<float>(raw_colour(x + 0.5, y + 0.5) * (1.0 - 0.2 * c));
+      f.depth[i] = block_depth(x, y);
+      raw_depths.insert(f.depth[i]);
+    }
+  }
+  undistortion.apply(f);
+  EXPECT_DOUBLE_EQ(f.camera.fx, pinhole.fx);
+  EXPECT_DOUBLE_EQ(f.camera.cy, pinhole.cy);
+
+  double worst_colour = 0, outside = 0;
+  std::size_t depth_as_nearest = 0, depth_made_up = 0;
+  for (int j = 0; j < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j) * w + i;
+      const Eigen::Vector2d p = raw_position(raw, pinhole, kFr1, i, j);
+      // Inside the raw image, up to the outer pixels' centres.
+      outside = std::max({outside, 0.5 - p.x(), p.x() - (w - 0.5), 0.5 - p.y(), p.y() - (h - 0.5)});
+      for (int c = 0; c < 3; ++c) {
+        worst_colour = std::max(
+            worst_colour, std::abs(f.rgb[k * 3 + c] - raw_colour(p.x(), p.y()) * (1.0 - 0.2 * c)));
+      }
+      depth_made_up += raw_depths.count(f.depth[k]) == 0;
+      const int nx = static_cast<int>(std::floor(p.x())), ny = static_cast<int>(std::floor(p.y()));
+      depth_as_nearest +=
+          f.depth[k] == block_depth(std::clamp(nx, 0, w - 1), std::clamp(ny, 0, h - 1));
+    }
+  }
+  EXPECT_LT(outside, 0.02) << "every pinhole pixel looks inside the raw image";
+  EXPECT_LT(worst_colour, 0.003)
+      << "colour is the raw image's where the model says each pixel looks";
+  EXPECT_EQ(depth_made_up, 0u) << "depth is never interpolated across an edge";
+  EXPECT_GT(static_cast<double>(depth_as_nearest), 0.995 * w * h)
+      << "depth is the nearest raw pixel's";
+}
+
+TEST(Undistortion, UndistortedCoordinatesInvertTheModel) {
+  std::vector<Eigen::Vector2d> distorted;
+  std::vector<Eigen::Vector2d> undistorted = {{0, 0}, {0.3, -0.2}, {-0.6, 0.45}, {0.61, 0.46}};
+  for (const Eigen::Vector2d& u : undistorted) distorted.push_back(distort(kFr1, u.x(), u.y()));
+  const std::vector<Eigen::Vector2d> back = app::undistort_normalized(kFr1, distorted);
+  ASSERT_EQ(back.size(), undistorted.size());
+  for (std::size_t i = 0; i < back.size(); ++i)
+    EXPECT_LT((back[i] - undistorted[i]).norm(), 1e-9) << i;
+}
+
+TEST(Undistortion, CoefficientsNoLensHasAreRefusedInOneLine) {
+  GSLAM_EXPECT_ERROR(
+      app::Undistortion(raw_camera(), app::LensDistortion{-3.0, 0, 0, 0, 0}, "cam.txt"), "cam.txt",
+      "folds the 320x240 image over");
+  GSLAM_EXPECT_ERROR(app::lens_distortion_from({0.1, 0.2, 0.3}, "calib"), "calib", "4 or 5");
+  GSLAM_EXPECT_ERROR(app::lens_distortion_from({0.1, NAN, 0, 0}, "calib"), "calib", "finite");
+  GSLAM_EXPECT_ERROR(app::parse_lens_distortion("0.1,x,0,0"), "distortion '0.1,x,0,0'");
+}
+
+TEST(Undistortion, RosCameraInfoDistortionModels) {
+  EXPECT_FALSE(app::lens_distortion_from_ros("", {}, "info").any());
+  EXPECT_FALSE(app::lens_distortion_from_ros("equidistant", {0, 0, 0, 0}, "info").any())
+      << "zeros are none";
+  const app::LensDistortion plumb_bob =
+      app::lens_distortion_from_ros("plumb_bob", kFr1.coefficients(), "info");
+  EXPECT_EQ(plumb_bob.coefficients(), kFr1.coefficients());
+  const app::LensDistortion rational = app::lens_distortion_from_ros(
+      "rational_polynomial", {0.1, -0.2, 0.001, 0.002, 0.05, 0, 0, 0}, "info");
+  EXPECT_DOUBLE_EQ(rational.k3, 0.05);
+  GSLAM_EXPECT_ERROR(
+      app::lens_distortion_from_ros("equidistant", {0.1, 0.01, 0, 0}, "/cam/camera_info"),
+      "/cam/camera_info", "'equidistant'", "not supported");
+  GSLAM_EXPECT_ERROR(
+      app::lens_distortion_from_ros("rational_polynomial", {0.1, -0.2, 0, 0, 0, 0.3, 0, 0}, "info"),
+      "'rational_polynomial'");
+}
+
+}  // namespace
