@@ -311,6 +311,8 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
   } else if (input.is_null()) {
     outputs->extra()["input"] = run_input_json(o.source, "watched", source->intrinsics(), o.watch_options.depth_scale,
                                                o.dataset_options.max_frames, 0, config);
+    if (source->undistortion())
+      outputs->extra()["input"]["lens"] = lens_json(*source->undistortion());
   }
   outputs->extra()["live"] = {{"source", source->describe()},
                              {"frames_received", source->delivered() + source->dropped()},

@@ -2,7 +2,6 @@
 
 #include <cstdio>
 #include <fstream>
-#include <vector>
 
 #include "io/slam_config_io.h"
 #include "splat/error.h"
@@ -20,7 +19,9 @@ nlohmann::json run_input_json(const std::filesystem::path& input, const std::str
           {"config", slam_config_to_json(config)}};
 }
 
-nlohmann::json lens_json(const splat::Camera& raw, const LensDistortion& d) {
+nlohmann::json lens_json(const Undistortion& undistortion) {
+  const splat::Camera& raw = undistortion.raw_camera();
+  const LensDistortion& d = undistortion.distortion();
   return {{"fx", raw.fx}, {"fy", raw.fy}, {"cx", raw.cx}, {"cy", raw.cy}, {"k1", d.k1},
           {"k2", d.k2},   {"p1", d.p1},   {"p2", d.p2},   {"k3", d.k3}};
 }
@@ -32,15 +33,15 @@ RecordedInput recorded_input(const nlohmann::json& in, const std::string& where)
     // A distorting lens: the raw camera and its distortion, which undistort the frames again.
     const bool lens = in.contains("lens");
     const nlohmann::json& k = lens ? in.at("lens") : in.at("intrinsics");
-    std::vector<const char*> names = {"fx", "fy", "cx", "cy"};
-    if (lens) names.insert(names.end(), {"k1", "k2", "p1", "p2", "k3"});
-    r.options.intrinsics.clear();
-    for (const char* name : names) {
-      char text[40];
-      std::snprintf(text, sizeof(text), "%s%.17g", r.options.intrinsics.empty() ? "" : ",",
-                    k.at(name).get<double>());
-      r.options.intrinsics += text;
+    splat::Camera camera;
+    camera.fx = k.at("fx").get<double>(), camera.fy = k.at("fy").get<double>();
+    camera.cx = k.at("cx").get<double>(), camera.cy = k.at("cy").get<double>();
+    LensDistortion distortion;
+    if (lens) {
+      distortion = {k.at("k1").get<double>(), k.at("k2").get<double>(), k.at("p1").get<double>(),
+                    k.at("p2").get<double>(), k.at("k3").get<double>()};
     }
+    r.options.intrinsics = intrinsics_text(camera, distortion);
     r.options.depth_scale = in.at("depth_scale").get<double>();
     r.options.max_frames = in.value("max_frames", 0);
     r.options.color_topic = in.value("color_topic", "");

@@ -20,7 +20,7 @@ nlohmann::json run_input_json(const std::filesystem::path& input, const std::str
                               double depth_scale, int max_frames, int test_every, const SlamConfig& config);
 // A distorting lens: the raw camera and its distortion ("lens": fx, fy, cx, cy, k1, k2, p1, p2,
 // k3), from which the frames were undistorted into "intrinsics".
-nlohmann::json lens_json(const splat::Camera& raw, const LensDistortion& distortion);
+nlohmann::json lens_json(const Undistortion& undistortion);
 // With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames").
 inline nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
                                      int test_every, const SlamConfig& config) {
@@ -29,8 +29,7 @@ inline nlohmann::json run_input_json(const std::filesystem::path& input, const D
   if (!dataset.color_topic.empty()) out["color_topic"] = dataset.color_topic;
   if (!dataset.depth_topic.empty()) out["depth_topic"] = dataset.depth_topic;
   if (!dataset.gt_frames.empty()) out["gt_frames"] = dataset.gt_frames;
-  if (dataset.undistortion)
-    out["lens"] = lens_json(dataset.undistortion->raw_camera(), dataset.distortion);
+  if (dataset.undistortion) out["lens"] = lens_json(*dataset.undistortion);
   return out;
 }
 

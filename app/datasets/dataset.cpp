@@ -49,34 +49,6 @@ void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
   cam.height = image.height;
 }
 
-// gslam's intrinsics.txt: "fx fy cx cy" in pixels, optionally followed by the lens distortion
-// "k1 k2 p1 p2 [k3]" (OpenCV's order), on one line.
-LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  std::istringstream words(line);
-  std::vector<double> k;
-  std::string word;
-  // Reads at most 10 words: a longer line is wrong whatever it holds.
-  while (k.size() < 10 && words >> word) {
-    char* end = nullptr;
-    k.push_back(std::strtod(word.c_str(), &end));
-    if (*end != '\0' || !std::isfinite(k.back())) k.back() = std::nan("");
-  }
-  const bool ok = (k.size() == 4 || k.size() == 8 || k.size() == 9) && k[0] > 0 && k[1] > 0 &&
-                  std::isfinite(k[2]) && std::isfinite(k[3]);
-  if (!ok)
-    fail(path, "expected 'fx fy cx cy', optionally followed by the distortion 'k1 k2 p1 p2 [k3]'");
-  cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
-  if (k.size() == 4) return {};
-  try {
-    return lens_distortion_from({k.begin() + 4, k.end()}, path.string());
-  } catch (const splat::Error& e) {
-    fail(path, "distortion 'k1 k2 p1 p2 [k3]' must be finite numbers under 100");
-  }
-}
-
 // Optional `path` (ROOT/groundtruth.txt, a TUM trajectory) associated with d.entries by timestamp
 // within 0.02 s, as TUM's tools do. A file matching no frame (another clock) is a warning.
 void attach_ground_truth(Dataset& d, const std::filesystem::path& path) {
@@ -468,6 +440,47 @@ LensDistortion apply_intrinsics(splat::Camera& cam, const std::string& text) {
   cam.cy = v[3];
   if (v.size() == 4) return {};
   return lens_distortion_from({v.begin() + 4, v.end()}, "intrinsics '" + text + "'");
+}
+
+LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::istringstream words(line);
+  std::vector<double> k;
+  std::string word;
+  // Reads at most 10 words: a longer line is wrong whatever it holds.
+  while (k.size() < 10 && words >> word) {
+    char* end = nullptr;
+    k.push_back(std::strtod(word.c_str(), &end));
+    if (*end != '\0' || !std::isfinite(k.back())) k.back() = std::nan("");
+  }
+  const bool ok = (k.size() == 4 || k.size() == 8 || k.size() == 9) && k[0] > 0 && k[1] > 0 &&
+                  std::isfinite(k[2]) && std::isfinite(k[3]);
+  if (!ok)
+    fail(path, "expected 'fx fy cx cy', optionally followed by the distortion 'k1 k2 p1 p2 [k3]'");
+  cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
+  if (k.size() == 4) return {};
+  try {
+    return lens_distortion_from({k.begin() + 4, k.end()}, path.string());
+  } catch (const splat::Error& e) {
+    fail(path, "distortion 'k1 k2 p1 p2 [k3]' must be finite numbers under 100");
+  }
+}
+
+std::string intrinsics_text(const splat::Camera& camera, const LensDistortion& distortion) {
+  std::string text;
+  std::vector<double> values = {camera.fx, camera.fy, camera.cx, camera.cy};
+  if (distortion.any()) {
+    const std::vector<double> k = distortion.coefficients();
+    values.insert(values.end(), k.begin(), k.end());
+  }
+  for (double v : values) {
+    char number[40];
+    std::snprintf(number, sizeof(number), "%s%.17g", text.empty() ? "" : ",", v);
+    text += number;
+  }
+  return text;
 }
 
 void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std::string& where) {

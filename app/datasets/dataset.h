@@ -90,6 +90,12 @@ LensDistortion apply_intrinsics(splat::Camera& camera, const std::string& intrin
 // Where `distortion` is some: sets d.distortion and d.undistortion from d.intrinsics (sized),
 // and d.intrinsics to the pinhole camera the frames load in. `where` names the camera's source.
 void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std::string& where);
+// gslam's intrinsics.txt: "fx fy cx cy" in pixels, optionally followed by the lens distortion
+// "k1 k2 p1 p2 [k3]" (OpenCV's order), on one line. Sets the camera's fx, fy, cx, cy and returns
+// the distortion (none without); throws splat::Error naming the file.
+LensDistortion read_intrinsics_file(splat::Camera& camera, const std::filesystem::path& path);
+// The camera and distortion as --intrinsics takes them, "fx,fy,cx,cy[,k1,k2,p1,p2,k3]", exactly.
+std::string intrinsics_text(const splat::Camera& camera, const LensDistortion& distortion);
 // d's camera from "fx,fy,cx,cy[,k1,k2,p1,p2[,k3]]", sized as the colour image `rgb`. Throws
 // splat::Error naming the text or the file.
 void set_camera(Dataset& d, const std::string& intrinsics, const std::filesystem::path& rgb);

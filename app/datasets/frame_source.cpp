@@ -136,6 +136,9 @@ class ReplaySource final : public ThreadedSource {
   }
   ~ReplaySource() override { stop_and_join(); }
   const splat::Camera& intrinsics() const override { return dataset_.intrinsics; }
+  std::shared_ptr<const Undistortion> undistortion() const override {
+    return dataset_.undistortion;
+  }
   std::string describe() const override {
     if (speed_ == kEveryFrame) return dataset_.root.string() + " replayed frame by frame (none dropped)";
     return dataset_.root.string() + " replayed at " + std::to_string(speed_).substr(0, 4) +
@@ -185,14 +188,12 @@ class WatchSource final : public ThreadedSource {
     dataset_.root = dir_;
     dataset_.depth_scale = options_.depth_scale;
     if (options_.intrinsics.empty()) {
-      std::ifstream in(dir_ / "intrinsics.txt");
-      double fx, fy, cx, cy;
-      if (!(in >> fx >> fy >> cx >> cy)) {
-        fail(dir_ / "intrinsics.txt",
-             "missing or malformed (expected 'fx fy cx cy'); or pass --intrinsics");
+      if (!std::filesystem::exists(dir_ / "intrinsics.txt")) {
+        fail(dir_ / "intrinsics.txt", "missing (expected 'fx fy cx cy'); or pass --intrinsics");
       }
-      options_.intrinsics = std::to_string(fx) + "," + std::to_string(fy) + "," +
-                            std::to_string(cx) + "," + std::to_string(cy);
+      splat::Camera camera;
+      const LensDistortion distortion = read_intrinsics_file(camera, dir_ / "intrinsics.txt");
+      options_.intrinsics = intrinsics_text(camera, distortion);
     }
     start();
   }
@@ -200,6 +201,10 @@ class WatchSource final : public ThreadedSource {
   const splat::Camera& intrinsics() const override {
     std::lock_guard lock(intrinsics_mutex_);
     return dataset_.intrinsics;
+  }
+  std::shared_ptr<const Undistortion> undistortion() const override {
+    std::lock_guard lock(intrinsics_mutex_);
+    return dataset_.undistortion;
   }
   std::string describe() const override { return "frames written into " + dir_.string(); }
 

@@ -32,6 +32,8 @@ class FrameSource {
   virtual std::size_t delivered() const = 0;  // frames handed out by next()
   virtual std::size_t dropped() const = 0;    // frames replaced before anyone took them
   virtual const splat::Camera& intrinsics() const = 0;
+  // Where the camera's lens distorts: what turns its raw frames into intrinsics() ones.
+  virtual std::shared_ptr<const Undistortion> undistortion() const { return nullptr; }
   virtual std::string describe() const = 0;
 };
 
@@ -43,7 +45,8 @@ inline constexpr double kEveryFrame = 0;
 std::unique_ptr<FrameSource> make_replay_source(Dataset dataset, double speed);
 
 struct WatchOptions {
-  std::string intrinsics;     // "fx,fy,cx,cy"; empty: DIR/intrinsics.txt ("fx fy cx cy")
+  // "fx,fy,cx,cy[,k1,k2,p1,p2,k3]"; empty: DIR/intrinsics.txt ("fx fy cx cy [k1 k2 p1 p2 k3]")
+  std::string intrinsics;
   double depth_scale = 5000;  // stored value per metre
   double idle_timeout = 10;   // seconds without a new frame before the stream counts as ended
   bool every_frame = false;   // each frame waits until the previous one is taken: none dropped

@@ -117,7 +117,7 @@ double overshoot(const cv::Mat& map_x, const cv::Mat& map_y) {
 
 Undistortion::Undistortion(const splat::Camera& raw, const LensDistortion& d,
                            const std::string& where)
-    : raw_(raw) {
+    : raw_(raw), distortion_(d) {
   const cv::Size size(raw.width, raw.height);
   const cv::Matx33d K = opencv_matrix(raw);
   const std::vector<double> D = d.coefficients();

@@ -55,12 +55,14 @@ class Undistortion {
   // The pinhole camera that frames come out in, and the raw one they come in.
   const splat::Camera& camera() const { return pinhole_; }
   const splat::Camera& raw_camera() const { return raw_; }
+  const LensDistortion& distortion() const { return distortion_; }
   // The frame in camera(): its raw images must be raw.width x raw.height.
   void apply(splat::RgbdFrame& frame) const;
 
  private:
   struct Maps;
   splat::Camera raw_, pinhole_;
+  LensDistortion distortion_;
   std::shared_ptr<const Maps> maps_;
 };
 

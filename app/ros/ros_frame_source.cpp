@@ -103,6 +103,11 @@ std::size_t RosFrameSource::dropped() const {
 
 const splat::Camera& RosFrameSource::intrinsics() const { return camera_; }
 
+std::shared_ptr<const Undistortion> RosFrameSource::undistortion() const {
+  std::lock_guard lock(mutex_);
+  return undistortion_;
+}
+
 std::string RosFrameSource::frame_id() const {
   std::lock_guard lock(mutex_);
   return frame_id_;

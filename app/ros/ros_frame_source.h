@@ -35,6 +35,7 @@ class RosFrameSource final : public FrameSource {
   std::size_t delivered() const override;
   std::size_t dropped() const override;
   const splat::Camera& intrinsics() const override;
+  std::shared_ptr<const Undistortion> undistortion() const override;
   std::string describe() const override { return topics_; }
 
   std::string frame_id() const;  // the last frame taken's header.frame_id

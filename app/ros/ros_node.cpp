@@ -127,6 +127,9 @@ class SharedSource final : public FrameSource {
   std::size_t delivered() const override { return source_->delivered(); }
   std::size_t dropped() const override { return source_->dropped(); }
   const splat::Camera& intrinsics() const override { return source_->intrinsics(); }
+  std::shared_ptr<const Undistortion> undistortion() const override {
+    return source_->undistortion();
+  }
   std::string describe() const override { return source_->describe(); }
 
  private:
@@ -173,6 +176,7 @@ class RosHost final : public LiveHost {
   nlohmann::json input_json(const splat::Camera& intrinsics, const SlamConfig& config) const override {
     nlohmann::json input = run_input_json(".", "ros", intrinsics, source_ ? source_->depth_scale() : 0, 0, 0, config);
     input["dataset"] = connection_.topics();
+    if (source_ && source_->undistortion()) input["lens"] = lens_json(*source_->undistortion());
     return input;
   }
 

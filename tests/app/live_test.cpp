@@ -123,6 +123,28 @@ TEST(CliLive, WatchedFolderTakesPairsAsTheyAppearUntilEnd) {
       << missing.output;
 }
 
+// A watched camera whose intrinsics.txt states its lens: frames are undistorted, and the run
+// records the raw camera beside the pinhole one, so that eval reads the frames alike.
+TEST(CliLive, WatchedCameraWithALensIsUndistortedAndRecorded) {
+  TempDir dir;
+  app::SyntheticOptions o;
+  o.frames = 3;
+  o.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  app::write_synthetic_sequence(dir / "camera", o);  // the generator's names are timestamps
+  std::filesystem::remove(dir / "camera" / "rgb.txt");
+  std::filesystem::remove(dir / "camera" / "depth.txt");
+  std::ofstream(dir / "camera" / "END") << "\n";
+  const auto r = run_gslam("live " + (dir / "camera").string() + " --watch --every-frame --out " +
+                           (dir / "run").string() + " --headless");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json input = read_json(dir / "run" / "summary.json").at("input");
+  ASSERT_TRUE(input.contains("lens")) << input.dump();
+  EXPECT_DOUBLE_EQ(input.at("lens").at("k3").get<double>(), 1.163314);
+  EXPECT_DOUBLE_EQ(input.at("lens").at("fx").get<double>(), 260);
+  EXPECT_GT(input.at("intrinsics").at("fx").get<double>(), 260)
+      << "the pinhole camera the frames were tracked in";
+}
+
 TEST(CliLive, CtrlCWritesCompleteOutputs) {
   TempDir dir;
   const auto seq = synthetic(dir, 30);
