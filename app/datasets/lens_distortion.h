@@ -44,8 +44,9 @@ LensDistortion lens_distortion_from_ros(const std::string& model, const std::vec
 // Resamples frames of a camera with lens distortion into a pinhole camera of the same size whose
 // every pixel sees inside the raw image (OpenCV's optimal new camera with alpha 0: no border
 // without colour or depth, at the cost of a little of the view). Colour is interpolated
-// bilinearly; depth, labels and the ignore mask take the nearest raw pixel, so that no depth is
-// made up across an object's edge.
+// bilinearly; depth too where the four raw pixels around are one surface, else it is the
+// nearest raw pixel's, so that no depth is made up across an object's edge or a hole; labels and
+// the ignore mask take the nearest raw pixel.
 class Undistortion {
  public:
   // Throws splat::Error naming `where` when the distortion folds the image over (coefficients

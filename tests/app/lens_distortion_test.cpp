@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
 #include "splat/error.h"
 #include "support/expect_error.h"
@@ -39,13 +38,19 @@ Eigen::Vector2d raw_position(const splat::Camera& raw, const splat::Camera& pinh
   return {raw.fx * n.x() + raw.cx, raw.fy * n.y() + raw.cy};
 }
 
-// A smooth raw colour (bilinear interpolation is exact to about 1e-3 on it) and a blocky raw
-// depth (16 px blocks, each its own value).
+// A smooth raw colour (bilinear interpolation is exact to about 1e-3 on it) and a raw depth of a
+// slanted wall (1.5-2.3 m) with a box in front (0.8 m, x and y in [100, 180)) and a hole (no
+// depth, x and y in [220, 240)).
 double raw_colour(double u, double v) {
   return 0.5 + 0.4 * std::sin(0.05 * u) * std::cos(0.07 * v);
 }
-float block_depth(int x, int y) {
-  return 1.0f + 0.1f * static_cast<float>(x / 16) + 0.01f * static_cast<float>(y / 16);
+// At pixel centre (u, v): the wall's depth is linear, which bilinear interpolation keeps exactly.
+double wall_depth(double u, double v) { return 1.5 + 0.002 * u + 0.001 * v; }
+enum class Region { kWall, kBox, kHole };
+Region region_of(int x, int y) {
+  if (x >= 100 && x < 180 && y >= 100 && y < 180) return Region::kBox;
+  if (x >= 220 && x < 240 && y >= 220 && y < 240) return Region::kHole;
+  return Region::kWall;
 }
 
 TEST(Undistortion, ResamplesARawFrameIntoAPinholeCameraThatSeesOnlyTheRawView) {
@@ -64,14 +69,15 @@ TEST(Undistortion, ResamplesARawFrameIntoAPinholeCameraThatSeesOnlyTheRawView) {
   const int w = raw.width, h = raw.height;
   f.rgb.resize(static_cast<std::size_t>(w) * h * 3);
   f.depth.resize(static_cast<std::size_t>(w) * h);
-  std::set<float> raw_depths;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
       for (int c = 0; c < 3; ++c)
         f.rgb[i * 3 + c] = static_cast<float>(raw_colour(x + 0.5, y + 0.5) * (1.0 - 0.2 * c));
-      f.depth[i] = block_depth(x, y);
-      raw_depths.insert(f.depth[i]);
+      const Region r = region_of(x, y);
+      f.depth[i] = r == Region::kBox    ? 0.8f
+                   : r == Region::kHole ? 0.0f
+                                        : static_cast<float>(wall_depth(x + 0.5, y + 0.5));
     }
   }
   undistortion.apply(f);
@@ -79,7 +85,7 @@ TEST(Undistortion, ResamplesARawFrameIntoAPinholeCameraThatSeesOnlyTheRawView) {
   EXPECT_DOUBLE_EQ(f.camera.cy, pinhole.cy);
 
   double worst_colour = 0, outside = 0;
-  std::size_t depth_as_nearest = 0, depth_made_up = 0;
+  std::size_t made_up = 0, inside_wall = 0, wall_off = 0, inside_box = 0, box_off = 0;
   for (int j = 0; j < h; ++j) {
     for (int i = 0; i < w; ++i) {
       const std::size_t k = static_cast<std::size_t>(j) * w + i;
@@ -90,18 +96,30 @@ TEST(Undistortion, ResamplesARawFrameIntoAPinholeCameraThatSeesOnlyTheRawView) {
         worst_colour = std::max(
             worst_colour, std::abs(f.rgb[k * 3 + c] - raw_colour(p.x(), p.y()) * (1.0 - 0.2 * c)));
       }
-      depth_made_up += raw_depths.count(f.depth[k]) == 0;
-      const int nx = static_cast<int>(std::floor(p.x())), ny = static_cast<int>(std::floor(p.y()));
-      depth_as_nearest +=
-          f.depth[k] == block_depth(std::clamp(nx, 0, w - 1), std::clamp(ny, 0, h - 1));
+      const float z = f.depth[k];
+      made_up += (z > 0 && z < 0.8f - 1e-6f) || (z > 0.8f + 1e-6f && z < 1.5f);
+      // The four raw pixels around p all in one region: the region's own depth there.
+      const int x0 = static_cast<int>(std::floor(p.x() - 0.5)),
+                y0 = static_cast<int>(std::floor(p.y() - 0.5));
+      const Region r = region_of(x0, y0);
+      if (r != region_of(x0 + 1, y0) || r != region_of(x0, y0 + 1) ||
+          r != region_of(x0 + 1, y0 + 1))
+        continue;
+      if (r == Region::kWall)
+        ++inside_wall, wall_off += std::abs(z - wall_depth(p.x(), p.y())) > 1e-4;
+      if (r == Region::kBox) ++inside_box, box_off += z != 0.8f;
     }
   }
   EXPECT_LT(outside, 0.02) << "every pinhole pixel looks inside the raw image";
   EXPECT_LT(worst_colour, 0.003)
       << "colour is the raw image's where the model says each pixel looks";
-  EXPECT_EQ(depth_made_up, 0u) << "depth is never interpolated across an edge";
-  EXPECT_GT(static_cast<double>(depth_as_nearest), 0.995 * w * h)
-      << "depth is the nearest raw pixel's";
+  EXPECT_EQ(made_up, 0u)
+      << "no depth between the box and the wall, nor between the hole and either";
+  EXPECT_GT(inside_wall, std::size_t(w * h / 2));
+  EXPECT_EQ(wall_off, 0u)
+      << "a surface's depth is interpolated where the model says each pixel looks";
+  EXPECT_GT(inside_box, 5000u);
+  EXPECT_EQ(box_off, 0u);
 }
 
 TEST(Undistortion, UndistortedCoordinatesInvertTheModel) {
