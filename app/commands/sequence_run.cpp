@@ -31,15 +31,18 @@ std::vector<std::string> backend_args(const BackendChoice& b) {
 double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   const std::filesystem::path dir = o.out / "baselines", record = dir / (s.name + ".json");
   const std::string dataset = s.path.string();
-  const nlohmann::json kept = read_json_or_null(record);
-  if (kept.is_object() && kept.value("dataset", "") == dataset &&
-      kept.value("max_frames", -1) == o.max_frames && kept.contains("ate_rmse_cm") &&
-      kept["ate_rmse_cm"].is_number()) {
-    return kept["ate_rmse_cm"].get<double>();
-  }
   DatasetOptions options;
   options.max_frames = o.max_frames;
   const Dataset d = open_dataset(s.path, options);
+  // The frames as read: a camera or lens read differently (a newer gslam) makes another baseline.
+  const std::string camera =
+      intrinsics_text(d.undistortion ? d.undistortion->raw_camera() : d.intrinsics, d.distortion);
+  const nlohmann::json kept = read_json_or_null(record);
+  if (kept.is_object() && kept.value("dataset", "") == dataset &&
+      kept.value("camera", "") == camera && kept.value("max_frames", -1) == o.max_frames &&
+      kept.contains("ate_rmse_cm") && kept["ate_rmse_cm"].is_number()) {
+    return kept["ate_rmse_cm"].get<double>();
+  }
   std::vector<StampedPose> truth;
   for (const DatasetEntry& e : d.entries) {
     if (e.T_world_cam_truth) truth.push_back({e.timestamp, *e.T_world_cam_truth});
@@ -52,6 +55,7 @@ double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   std::filesystem::create_directories(dir);
   write_tum_trajectory(dir / (s.name + ".txt"), baseline.poses);
   write_json(record, {{"dataset", dataset},
+                      {"camera", camera},
                       {"max_frames", o.max_frames},
                       {"ate_rmse_cm", ate_cm},
                       {"failures", baseline.failures},

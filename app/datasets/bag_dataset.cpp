@@ -256,19 +256,21 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
   if (info_topic.empty() && infos.size() == 1) info_topic = infos.front();
   std::optional<RosCameraInfo> info;
   if (!info_topic.empty()) info = bag->camera_info(info_topic);
+  if (info && is_rectified_topic(colour.topic)) use_rectified_camera(*info);
   if (!options.intrinsics.empty()) {
     // open_dataset() applies them, as for every format.
   } else if (info) {
     const auto& k = info->k;
     if (!(k[0] > 0) || !(k[4] > 0) || !std::isfinite(k[0]) || !std::isfinite(k[4]) ||
         !std::isfinite(k[2]) || !std::isfinite(k[5])) {
-      fail(path, info_topic + ": camera matrix K has fx " + std::to_string(k[0]) + ", fy " +
-                     std::to_string(k[4]) +
-                     " (expected positive, finite); give --intrinsics fx,fy,cx,cy");
+      fail(path,
+           info_topic + ": camera matrix K has fx " + std::to_string(k[0]) + ", fy " +
+               std::to_string(k[4]) +
+               " (expected positive, finite); give --intrinsics fx,fy,cx,cy[,k1,k2,p1,p2,k3]");
     }
     d.intrinsics.fx = k[0], d.intrinsics.fy = k[4], d.intrinsics.cx = k[2], d.intrinsics.cy = k[5];
-    d.distortion = lens_distortion_from_ros(info->distortion_model, info->d,
-                                            path.string() + ": " + info_topic);
+    d.camera_source = path.string() + ": " + info_topic;
+    d.distortion = lens_distortion_from_ros(info->distortion_model, info->d, d.camera_source);
   } else {
     fail(path, infos.empty()
                    ? "no sensor_msgs/CameraInfo topic: give --intrinsics fx,fy,cx,cy"
@@ -305,6 +307,15 @@ Dataset open_bag(const std::filesystem::path& path, const DatasetOptions& option
   } else {
     d.intrinsics.width = static_cast<int>(colour.index.front().width);
     d.intrinsics.height = static_cast<int>(colour.index.front().height);
+  }
+  // A CameraInfo of another size (the depth camera's, a binned stream's) is not this camera.
+  if (info && options.intrinsics.empty() && info->width != 0 &&
+      (info->width != std::uint32_t(d.intrinsics.width) ||
+       info->height != std::uint32_t(d.intrinsics.height))) {
+    fail(path, info_topic + " is for " + std::to_string(info->width) + "x" +
+                   std::to_string(info->height) + " images, " + colour.topic + " has " +
+                   std::to_string(d.intrinsics.width) + "x" + std::to_string(d.intrinsics.height) +
+                   ": give --intrinsics fx,fy,cx,cy[,k1,k2,p1,p2,k3]");
   }
   const RosImage& dh = depth.index[d0];
   if (dh.width != std::uint32_t(d.intrinsics.width) ||

@@ -30,7 +30,21 @@ struct RosCameraInfo {
   std::array<double, 9> k{};  // row-major: fx 0 cx, 0 fy cy, 0 0 1
   std::string distortion_model;  // "plumb_bob", ...
   std::vector<double> d;         // its coefficients
+  std::array<double, 12>
+      p{};  // row-major 3x4: the rectified images' camera (fx' 0 cx' 0, 0 fy' cy' 0, ...)
 };
+
+// ROS's image_proc convention: a CameraInfo describes the raw images, and images on a topic
+// named *rect* (image_rect, image_rect_color) are already rectified into the camera P, without
+// distortion. For such a topic the camera is P's (where it is given) and D is none.
+inline bool is_rectified_topic(const std::string& topic) {
+  return topic.find("rect") != std::string::npos;
+}
+inline void use_rectified_camera(RosCameraInfo& info) {
+  if (info.p[0] > 0 && info.p[5] > 0)
+    info.k = {info.p[0], 0, info.p[2], 0, info.p[5], info.p[6], 0, 0, 1};
+  info.d.clear();
+}
 
 // One transform of a tf2_msgs/TFMessage (ROS 1's tf/tfMessage alike): the pose of frame
 // `child` in frame `parent` at `stamp`, p_parent = T_parent_child * p_child.

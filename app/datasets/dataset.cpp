@@ -76,13 +76,17 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   // fr2's images are raw, with their lens distortion; fr3's are rectified.
   if (!options.intrinsics.empty()) {
     d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.camera_source = "--intrinsics " + options.intrinsics;
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
     d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
+    d.camera_source = (root / "intrinsics.txt").string();
   } else if (name.find("freiburg1") != std::string::npos) {
+    d.camera_source = "the freiburg1 preset";
     d.intrinsics.fx = 517.306408, d.intrinsics.fy = 516.469215, d.intrinsics.cx = 318.643040,
     d.intrinsics.cy = 255.313989;
     d.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
   } else if (name.find("freiburg2") != std::string::npos) {
+    d.camera_source = "the freiburg2 preset";
     d.intrinsics.fx = 520.908620, d.intrinsics.fy = 521.007327, d.intrinsics.cx = 325.141442,
     d.intrinsics.cy = 249.701764;
     d.distortion = {0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
@@ -137,6 +141,7 @@ Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& op
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 6553.5;
   if (!options.intrinsics.empty()) {
     d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.camera_source = "--intrinsics " + options.intrinsics;
   } else {
     d.intrinsics.fx = d.intrinsics.fy = 600.0;
     d.intrinsics.cx = 599.5;
@@ -220,9 +225,10 @@ ImageFolder list_image_folder(const std::filesystem::path& root) {
 }
 
 // A folder of images as a camera driver writes it for `live --watch`: rgb/NAME.png|jpg and
-// depth/NAME.png paired by identical stem NAME, intrinsics.txt "fx fy cx cy" (or --intrinsics),
-// optional groundtruth.txt. When every frame's stem is a number it is the timestamp in seconds
-// and frames are in numeric order; otherwise frames are in name order, stamped index / 30 s.
+// depth/NAME.png paired by identical stem NAME, intrinsics.txt "fx fy cx cy [k1 k2 p1 p2 [k3]]" (or
+// --intrinsics), optional groundtruth.txt. When every frame's stem is a number it is the timestamp
+// in seconds and frames are in numeric order; otherwise frames are in name order, stamped index /
+// 30 s.
 Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder,
                     const DatasetOptions& options) {
   Dataset d;
@@ -231,8 +237,10 @@ Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;  // as TUM and --watch
   if (!options.intrinsics.empty()) {
     d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
+    d.camera_source = "--intrinsics " + options.intrinsics;
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
     d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
+    d.camera_source = (root / "intrinsics.txt").string();
   } else {
     fail(root / "intrinsics.txt",
          "not found: a folder of images (rgb/, depth/) needs the camera, 'fx fy cx cy' in "
@@ -444,13 +452,15 @@ LensDistortion apply_intrinsics(splat::Camera& cam, const std::string& text) {
 
 LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
   std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  std::istringstream words(line);
+  if (!in) fail(path, "cannot open file");
+  // The numbers may span lines; the file is a few dozen bytes, so a longer one is not a camera.
+  std::string text(4096, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (!in.eof()) fail(path, "over 4 KiB: not 'fx fy cx cy [k1 k2 p1 p2 [k3]]'");
+  std::istringstream words(text);
   std::vector<double> k;
-  std::string word;
-  // Reads at most 10 words: a longer line is wrong whatever it holds.
-  while (k.size() < 10 && words >> word) {
+  for (std::string word; k.size() < 10 && words >> word;) {
     char* end = nullptr;
     k.push_back(std::strtod(word.c_str(), &end));
     if (*end != '\0' || !std::isfinite(k.back())) k.back() = std::nan("");
@@ -464,7 +474,7 @@ LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::p
   try {
     return lens_distortion_from({k.begin() + 4, k.end()}, path.string());
   } catch (const splat::Error& e) {
-    fail(path, "distortion 'k1 k2 p1 p2 [k3]' must be finite numbers under 100");
+    fail(path, std::string(e.what()).substr(path.string().size() + 2));
   }
 }
 
@@ -484,6 +494,7 @@ std::string intrinsics_text(const splat::Camera& camera, const LensDistortion& d
 }
 
 void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std::string& where) {
+  if (d.undistortion) d.intrinsics = d.undistortion->raw_camera();  // never undistorted twice
   d.distortion = distortion;
   d.undistortion.reset();
   if (!distortion.any()) return;
@@ -507,8 +518,10 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   Dataset d;
   if (recording) {
     d = open_bag(root, options);
-    if (!options.intrinsics.empty())
+    if (!options.intrinsics.empty()) {
       d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
+      d.camera_source = "--intrinsics " + options.intrinsics;
+    }
     if (options.gt_frames.empty()) attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
   } else if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {
     d = open_tum(root, options);
@@ -540,7 +553,7 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
     d.entries.resize(static_cast<std::size_t>(options.max_frames));
   }
   if (!d.store) set_size_from(d.intrinsics, d.entries.front().rgb);
-  set_lens_distortion(d, d.distortion, root.string() + " (the camera's lens distortion)");
+  set_lens_distortion(d, d.distortion, d.camera_source.empty() ? root.string() : d.camera_source);
   // Label images: named, or labels/ beside the colour folder.
   if (d.store && !options.labels.empty()) fail(options.labels, "label images are read for dataset folders, not recordings");
   if (!options.labels.empty()) {

@@ -52,6 +52,8 @@ struct Dataset {
   // lens distorts (`distortion`), the one `undistortion` resamples the frames into.
   splat::Camera intrinsics;
   LensDistortion distortion;  // of the raw images; none for rectified ones
+  std::string camera_source;  // where the camera came from ("DIR/intrinsics.txt", "--intrinsics",
+                              // ...), for errors
   std::shared_ptr<const Undistortion> undistortion;
   double depth_scale = 5000;
   std::vector<DatasetEntry> entries;  // in a recording, rgb and depth both name the file

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -12,12 +13,18 @@
 namespace app {
 
 LensDistortion lens_distortion_from(const std::vector<double>& c, const std::string& what) {
-  bool sane = c.size() == 4 || c.size() == 5;
-  for (double v : c) sane = sane && std::isfinite(v) && std::abs(v) < 100;
-  if (!sane) {
-    throw splat::Error(what +
-                       ": expected 4 or 5 finite distortion coefficients k1,k2,p1,p2[,k3], got " +
+  if (c.size() != 4 && c.size() != 5) {
+    throw splat::Error(what + ": expected 4 or 5 distortion coefficients k1,k2,p1,p2[,k3], got " +
                        std::to_string(c.size()));
+  }
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (!std::isfinite(c[i]) || std::abs(c[i]) >= 100) {
+      static const char* const kNames[] = {"k1", "k2", "p1", "p2", "k3"};
+      char value[32];
+      std::snprintf(value, sizeof(value), "%g", c[i]);
+      throw splat::Error(what + ": distortion " + kNames[i] + " is " + value +
+                         " (expected a finite number under 100)");
+    }
   }
   return {c[0], c[1], c[2], c[3], c.size() == 5 ? c[4] : 0.0};
 }
@@ -38,7 +45,7 @@ std::vector<Eigen::Vector2d> undistort_normalized(const LensDistortion& d,
 LensDistortion parse_lens_distortion(const std::string& text) {
   std::vector<double> c;
   std::stringstream ss(text);
-  for (std::string item; c.size() < 6 && std::getline(ss, item, ',');) {
+  for (std::string item; c.size() < 64 && std::getline(ss, item, ',');) {
     char* end = nullptr;
     c.push_back(std::strtod(item.c_str(), &end));
     if (item.empty() || *end != '\0') c.back() = std::nan("");
@@ -87,8 +94,8 @@ void remap_plane(std::vector<T>& data, int width, int height, int type, int chan
 
 namespace {
 
-// Whether the lens maps radii monotonically out to where the raw image's farthest corner is seen
-// (`reach`, normalized): past its peak a radial polynomial shows points nearer the axis again.
+// Whether the lens maps radii monotonically out to `reach` (normalized, distorted): past its peak
+// a radial polynomial shows points nearer the axis again.
 bool radially_monotonic(const LensDistortion& d, double reach) {
   double last = 0;
   for (double r = 1e-3; r < 10; r += 1e-3) {
@@ -151,8 +158,11 @@ Undistortion::Undistortion(const splat::Camera& raw, const LensDistortion& d,
   const cv::Size size(raw.width, raw.height);
   const cv::Matx33d K = opencv_matrix(raw);
   const std::vector<double> D = d.coefficients();
-  const double reach = std::hypot(std::max(raw.cx, raw.width - raw.cx) / raw.fx,
-                                  std::max(raw.cy, raw.height - raw.cy) / raw.fy);
+  raw.validate(where);
+  // Out to the raw image's farthest edge: the pinhole view lies inside the edges, and a model
+  // fitted without data in the corners (barrel lenses with k1 alone) may fold only there.
+  const double reach = std::max(std::max(raw.cx, raw.width - raw.cx) / raw.fx,
+                                std::max(raw.cy, raw.height - raw.cy) / raw.fy);
   bool usable = radially_monotonic(d, reach);
   auto maps = std::make_shared<Maps>();
   if (usable) {

@@ -174,6 +174,8 @@ RosCameraInfo parse_camera_info(std::span<const std::uint8_t> bytes, bool ros1) 
     throw Malformed{"d has " + std::to_string(d) + " distortion coefficients (at most 64)"};
   for (std::uint32_t i = 0; i < d; ++i) info.d.push_back(c.number<double>("d"));
   for (double& k : info.k) k = c.number<double>("k");
+  for (int i = 0; i < 9; ++i) c.number<double>("r");
+  for (double& p : info.p) p = c.number<double>("p");
   return info;
 }
 

@@ -144,6 +144,7 @@ class Ros1BagReader final : public BagReader {
         for (int i = 0; i < 9; ++i) out->k[std::size_t(i)] = info->K[std::size_t(i)];
         out->distortion_model = info->distortion_model;
         out->d.assign(info->D.begin(), info->D.end());
+        for (int i = 0; i < 12; ++i) out->p[std::size_t(i)] = info->P[std::size_t(i)];
         break;
       }
     });

@@ -353,6 +353,13 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         "synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake "
         "and holes below 1, depth lag under half a frame, gain swing in [0, 2] expected");
   }
+  if (o.distortion
+          .any()) {  // a lens that folds the image over is refused before anything is written
+    splat::Camera lens;
+    lens.fx = lens.fy = o.focal, lens.cx = o.width / 2.0, lens.cy = o.height / 2.0;
+    lens.width = o.width, lens.height = o.height;
+    const Undistortion check(lens, o.distortion, "synthetic sequence");
+  }
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> gauss(0, 1);
   std::filesystem::create_directories(dir / "rgb");

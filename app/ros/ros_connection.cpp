@@ -301,6 +301,8 @@ void Connection::start(const ConnectionOptions& options, std::function<void(Rgbd
         std::copy(info->K.begin(), info->K.end(), out.k.begin());
         out.distortion_model = info->distortion_model;
         out.d.assign(info->D.begin(), info->D.end());
+        std::copy(info->P.begin(), info->P.end(), out.p.begin());
+        if (is_rectified_topic(ros::names::resolve("rgb/image"))) use_rectified_camera(out);
         camera_info(out);
       });
   m.save_srv = pnh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(

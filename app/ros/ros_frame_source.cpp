@@ -49,25 +49,32 @@ std::optional<ArrivedFrame> RosFrameSource::next(std::chrono::milliseconds timeo
   queue_.pop_front();
   ++delivered_;
   if (camera_.width == 0) {  // the first frame: the camera, sized as its images
+    // Built aside and kept only whole: a camera that fails leaves the source as it was.
+    splat::Camera camera;
     LensDistortion distortion;
     if (known) {
-      distortion = apply_intrinsics(camera_, fixed_intrinsics_);
+      distortion = apply_intrinsics(camera, fixed_intrinsics_);
     } else {
       const auto& k = info_->k;
-      camera_.fx = k[0], camera_.fy = k[4], camera_.cx = k[2], camera_.cy = k[5];
-      if (!(camera_.fx > 0 && camera_.fy > 0)) {
-        throw splat::Error("rgb/camera_info: K has fx " + std::to_string(camera_.fx) + ", fy " +
-                           std::to_string(camera_.fy) + " (an uncalibrated camera?): set ~intrinsics fx,fy,cx,cy");
+      camera.fx = k[0], camera.fy = k[4], camera.cx = k[2], camera.cy = k[5];
+      if (!(camera.fx > 0 && camera.fy > 0)) {
+        throw splat::Error(
+            "rgb/camera_info: K has fx " + std::to_string(camera.fx) + ", fy " +
+            std::to_string(camera.fy) +
+            " (an uncalibrated camera?): set ~intrinsics fx,fy,cx,cy[,k1,k2,p1,p2,k3]");
       }
       distortion = lens_distortion_from_ros(info_->distortion_model, info_->d, "rgb/camera_info");
     }
-    camera_.width = static_cast<int>(m.colour.width);
-    camera_.height = static_cast<int>(m.colour.height);
-    camera_.validate("rgb/image");
+    camera.width = static_cast<int>(m.colour.width);
+    camera.height = static_cast<int>(m.colour.height);
+    camera.validate("rgb/image");
+    std::shared_ptr<const Undistortion> undistortion;
     if (distortion.any()) {
-      undistortion_ = std::make_shared<const Undistortion>(camera_, distortion, "rgb/camera_info");
-      camera_ = undistortion_->camera();
+      undistortion = std::make_shared<const Undistortion>(camera, distortion, "rgb/camera_info");
+      camera = undistortion->camera();
     }
+    camera_ = camera;
+    undistortion_ = std::move(undistortion);
   }
   frame_id_ = m.frame_id;
   depth_scale_ = fixed_depth_scale_ > 0 ? fixed_depth_scale_ : default_depth_scale(m.depth);

@@ -16,7 +16,7 @@ struct RosNodeOptions {
   std::filesystem::path config;             // JSON SLAM settings, under the parameters
   std::string backend = "auto";             // auto | cpu | vulkan
   int threads = 0;                          // CPU backend threads; 0: all
-  std::string intrinsics;                   // "fx,fy,cx,cy"; empty: from rgb/camera_info
+  std::string intrinsics;  // "fx,fy,cx,cy[,k1,k2,p1,p2,k3]"; empty: from rgb/camera_info
   double depth_scale = 0;                   // stored depth per metre; 0: by the encoding (16UC1 mm, 32FC1 m)
   int queue_size = 1;                       // frames waiting for tracking; 1: the newest only, as a camera
   double sync_slop = 0.02;                  // seconds between paired colour and depth stamps, at most

@@ -117,6 +117,9 @@ struct McapSpec {
   bool chunks = true;  // false: messages at the top level of the file
   int frames = kFrames;
   std::vector<double> distortion = {0, 0, 0, 0, 0};  // CameraInfo's plumb_bob d
+  std::string colour_topic = "/camera/rgb/image_color";
+  std::array<double, 12> p{};                 // CameraInfo's P; zeros: from K
+  std::array<int, 2> info_size = {640, 480};  // CameraInfo's width and height
 };
 
 // Writes the first spec.frames teddy frames with the reference writer to `out`.
@@ -141,12 +144,18 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
            << ct[1] << R"(], "depth": ")" << d << R"(", "depth_stamp": [)" << dt[0] << "," << dt[1]
            << "]}";
   }
-  std::ostringstream k;
-  k << std::setprecision(17);
-  for (std::size_t i = 0; i < 9; ++i) k << (i ? "," : "") << kTeddyK[i];
-  k << R"(], "d": [)";
-  for (std::size_t i = 0; i < spec.distortion.size(); ++i)
-    k << (i ? "," : "") << spec.distortion[i];
+  // The CameraInfo: "k", "d", optionally "p", and the size it states.
+  std::ostringstream camera;
+  camera << std::setprecision(17);
+  const auto list = [&](const char* name, const auto& values) {
+    camera << '"' << name << R"(": [)";
+    for (std::size_t i = 0; i < values.size(); ++i) camera << (i ? "," : "") << values[i];
+    camera << "], ";
+  };
+  list("k", kTeddyK);
+  list("d", spec.distortion);
+  if (spec.p[0] > 0) list("p", spec.p);
+  camera << R"("info_width": )" << spec.info_size[0] << R"(, "info_height": )" << spec.info_size[1];
   std::ostringstream tf;
   tf << std::setprecision(17);
   if (spec.tf) {
@@ -170,8 +179,8 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
   gslam::test::write_text(
       raw / "manifest.json",
       R"({"compression": ")" + spec.compression + R"(", "chunk_size": 1500000, "use_chunks": )" +
-          (spec.chunks ? "true" : "false") + R"(, "width": 640, "height": 480, "k": [)" + k.str() +
-          R"(], "colour_topic": "/camera/rgb/image_color", "colour_encoding": ")" +
+          (spec.chunks ? "true" : "false") + R"(, "width": 640, "height": 480, )" + camera.str() +
+          R"(, "colour_topic": ")" + spec.colour_topic + R"(", "colour_encoding": ")" +
           spec.colour_encoding + R"(", "depth_topic": )" +
           (spec.depth ? R"("/camera/depth/image")" : "null") + R"(, "depth_encoding": ")" +
           spec.depth_encoding + R"(", "info_topic": )" +
@@ -335,6 +344,30 @@ TEST_F(McapInput, CameraInfoDistortionUndistortsTheFrames) {
   expect_same_frames(
       open_teddy(2, "535.4,539.2,320.1,247.6,0.262383,-0.953104,-0.005358,0.002628,1.163314"), bag,
       2);
+}
+
+// ROS's convention: images on a *rect* topic are already rectified, into CameraInfo's P; its D
+// describes the raw images and must not be applied again. A CameraInfo of another size is
+// another camera's.
+TEST_F(McapInput, RectifiedTopicsTakePAndNotD) {
+  TempDir dir;
+  McapSpec spec;
+  spec.frames = 2;
+  spec.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  spec.colour_topic = "/camera/rgb/image_rect_color";
+  spec.p = {530, 0, 321, 0, 0, 531, 246, 0, 0, 0, 1, 0};
+  write_teddy_mcap(open_teddy(2), spec, dir / "rect.mcap");
+  const app::Dataset bag = app::open_dataset(dir / "rect.mcap");
+  EXPECT_FALSE(bag.distortion.any());
+  EXPECT_FALSE(bag.undistortion);
+  EXPECT_DOUBLE_EQ(bag.intrinsics.fx, 530);
+  EXPECT_DOUBLE_EQ(bag.intrinsics.cy, 246);
+  spec.colour_topic = "/camera/rgb/image_color";
+  spec.info_size = {320, 240};
+  write_teddy_mcap(open_teddy(2), spec, dir / "binned.mcap");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "binned.mcap"),
+                     "/camera/rgb/camera_info is for 320x240 images",
+                     "/camera/rgb/image_color has 640x480");
 }
 
 TEST_F(McapInput, Lz4ChunksAnd16BitDepth) {

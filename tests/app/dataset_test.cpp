@@ -150,7 +150,19 @@ TEST(Dataset, IntrinsicsMayStateTheLensDistortionAndRunsRecordIt) {
   gslam::test::write_text(dir / "seq" / "intrinsics.txt", "52 52 32 24 0.1 -0.2\n");
   GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "'k1 k2 p1 p2 [k3]'");
   gslam::test::write_text(dir / "seq" / "intrinsics.txt", "52 52 32 24 0.1 -0.2 0 0 1e300\n");
-  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "under 100");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "distortion k3 is 1e+300",
+                     "under 100");
+  // The distortion may follow on a line of its own.
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt",
+                          "52 52 32 24\n0.1 -0.2 0.001 0.002 0.05\n");
+  EXPECT_DOUBLE_EQ(app::open_dataset(dir / "seq").distortion.k3, 0.05);
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt",
+                          "52 52 32 24" + std::string(5000, ' ') + "\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt", "over 4 KiB");
+  // A lens that folds the image over (k1 -3 turns back at a third of the focal length).
+  gslam::test::write_text(dir / "seq" / "intrinsics.txt", "52 52 32 24 -3 0 0 0\n");
+  GSLAM_EXPECT_ERROR(app::open_dataset(dir / "seq"), "intrinsics.txt",
+                     "folds the 64x48 image over");
 }
 
 // A folder matching no layout: one line naming every layout and what this folder lacks.

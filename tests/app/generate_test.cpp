@@ -45,7 +45,7 @@ TEST(CliGenerate, DistortionIsSeenThroughAndStatedInIntrinsics) {
       run_gslam("generate " + (dir / "bad").string() + " --frames 2 --distortion 0.1");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_EQ(bad.output,
-            "error: distortion '0.1': expected 4 or 5 finite distortion coefficients "
+            "error: distortion '0.1': expected 4 or 5 distortion coefficients "
             "k1,k2,p1,p2[,k3], got 1\n");
 }
 

@@ -132,12 +132,23 @@ TEST(Undistortion, UndistortedCoordinatesInvertTheModel) {
     EXPECT_LT((back[i] - undistorted[i]).norm(), 1e-9) << i;
 }
 
+// A wide barrel lens calibrated with k1 alone: its model turns back only beyond the image's
+// edges, in the corners, which the pinhole view does not reach.
+TEST(Undistortion, BarrelLensWithK1AloneIsAccepted) {
+  splat::Camera raw;
+  raw.fx = raw.fy = 525, raw.cx = 319.5, raw.cy = 239.5, raw.width = 640, raw.height = 480;
+  const app::Undistortion undistortion(raw, app::LensDistortion{-0.3, 0, 0, 0, 0}, "barrel");
+  EXPECT_LT(undistortion.camera().fx, raw.fx)
+      << "barrel: the pinhole view is wider than the focal length says";
+}
+
 TEST(Undistortion, CoefficientsNoLensHasAreRefusedInOneLine) {
   GSLAM_EXPECT_ERROR(
       app::Undistortion(raw_camera(), app::LensDistortion{-3.0, 0, 0, 0, 0}, "cam.txt"), "cam.txt",
       "folds the 320x240 image over");
   GSLAM_EXPECT_ERROR(app::lens_distortion_from({0.1, 0.2, 0.3}, "calib"), "calib", "4 or 5");
-  GSLAM_EXPECT_ERROR(app::lens_distortion_from({0.1, NAN, 0, 0}, "calib"), "calib", "finite");
+  GSLAM_EXPECT_ERROR(app::lens_distortion_from({0.1, NAN, 0, 0}, "calib"), "calib",
+                     "distortion k2 is nan", "finite");
   GSLAM_EXPECT_ERROR(app::parse_lens_distortion("0.1,x,0,0"), "distortion '0.1,x,0,0'");
 }
 

@@ -4,6 +4,7 @@
 // Usage: node write_mcap.mjs TOOLS_DIR MANIFEST.json OUT.mcap
 // MANIFEST: {compression: "zstd" | "lz4" | "", chunk_size, use_chunks (default true: messages in
 //   chunks, as rosbag2 writes them; false: at the top level), width, height, k: [9 numbers],
+//   d: [5] (default zeros), p: [12] (default from k), info_width, info_height (default width, height),
 //   colour_topic, colour_encoding (rgb8, bgr8, ...; "png" makes CompressedImage), depth_topic,
 //   depth_encoding (16UC1 | 32FC1), info_topic (depth_topic, info_topic null: none written),
 //   frames: [{colour: FILE, colour_stamp: [sec, nsec], depth: FILE, depth_stamp: [sec, nsec]}],
@@ -102,9 +103,10 @@ for (const [i, f] of manifest.frames.entries()) {
   if (manifest.info_topic && i === 0) {
     const k = manifest.k;
     await publish(manifest.info_topic, f.colour_stamp, {
-      header: headerOf(f.colour_stamp, "rgb"), height, width, distortion_model: "plumb_bob",
+      header: headerOf(f.colour_stamp, "rgb"), height: manifest.info_height ?? height,
+      width: manifest.info_width ?? width, distortion_model: "plumb_bob",
       d: manifest.d ?? [0, 0, 0, 0, 0], k, r: [1, 0, 0, 0, 1, 0, 0, 0, 1],
-      p: [k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
+      p: manifest.p ?? [k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
       roi: { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false },
     });
   }
