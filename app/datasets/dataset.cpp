@@ -49,6 +49,16 @@ void set_size_from(splat::Camera& cam, const std::filesystem::path& rgb) {
   cam.height = image.height;
 }
 
+// The camera given on the command line (--intrinsics), or by an intrinsics.txt file.
+void use_given_intrinsics(Dataset& d, const std::string& text) {
+  d.distortion = apply_intrinsics(d.intrinsics, text);
+  d.camera_source = "--intrinsics " + text;
+}
+void use_intrinsics_file(Dataset& d, const std::filesystem::path& file) {
+  d.distortion = read_intrinsics_file(d.intrinsics, file);
+  d.camera_source = file.string();
+}
+
 // Optional `path` (ROOT/groundtruth.txt, a TUM trajectory) associated with d.entries by timestamp
 // within 0.02 s, as TUM's tools do. A file matching no frame (another clock) is a warning.
 void attach_ground_truth(Dataset& d, const std::filesystem::path& path) {
@@ -75,11 +85,9 @@ Dataset open_tum(const std::filesystem::path& root, const DatasetOptions& option
   // Calibrated colour cameras of the TUM Kinects (TUM RGB-D dataset documentation): fr1's and
   // fr2's images are raw, with their lens distortion; fr3's are rectified.
   if (!options.intrinsics.empty()) {
-    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
-    d.camera_source = "--intrinsics " + options.intrinsics;
+    use_given_intrinsics(d, options.intrinsics);
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
-    d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
-    d.camera_source = (root / "intrinsics.txt").string();
+    use_intrinsics_file(d, root / "intrinsics.txt");
   } else if (name.find("freiburg1") != std::string::npos) {
     d.camera_source = "the freiburg1 preset";
     d.intrinsics.fx = 517.306408, d.intrinsics.fy = 516.469215, d.intrinsics.cx = 318.643040,
@@ -140,8 +148,7 @@ Dataset open_replica(const std::filesystem::path& root, const DatasetOptions& op
   d.root = root;
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 6553.5;
   if (!options.intrinsics.empty()) {
-    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
-    d.camera_source = "--intrinsics " + options.intrinsics;
+    use_given_intrinsics(d, options.intrinsics);
   } else {
     d.intrinsics.fx = d.intrinsics.fy = 600.0;
     d.intrinsics.cx = 599.5;
@@ -236,11 +243,9 @@ Dataset open_images(const std::filesystem::path& root, const ImageFolder& folder
   d.root = root;
   d.depth_scale = options.depth_scale > 0 ? options.depth_scale : 5000.0;  // as TUM and --watch
   if (!options.intrinsics.empty()) {
-    d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
-    d.camera_source = "--intrinsics " + options.intrinsics;
+    use_given_intrinsics(d, options.intrinsics);
   } else if (std::filesystem::exists(root / "intrinsics.txt")) {
-    d.distortion = read_intrinsics_file(d.intrinsics, root / "intrinsics.txt");
-    d.camera_source = (root / "intrinsics.txt").string();
+    use_intrinsics_file(d, root / "intrinsics.txt");
   } else {
     fail(root / "intrinsics.txt",
          "not found: a folder of images (rgb/, depth/) needs the camera, 'fx fy cx cy' in "
@@ -429,25 +434,35 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
   return f;
 }
 
+namespace {
+
+// The camera from "fx fy cx cy [k1 k2 p1 p2 [k3]]" numbers (4, 8 or 9): false when the count or
+// the pinhole part is wrong; the distortion's own errors name `what`.
+bool camera_from_numbers(splat::Camera& cam, LensDistortion& distortion,
+                         const std::vector<double>& k, const std::string& what) {
+  const bool ok = (k.size() == 4 || k.size() == 8 || k.size() == 9) && k[0] > 0 && k[1] > 0 &&
+                  std::isfinite(k[0]) && std::isfinite(k[1]) && std::isfinite(k[2]) &&
+                  std::isfinite(k[3]);
+  if (!ok) return false;
+  cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
+  distortion =
+      k.size() == 4 ? LensDistortion{} : lens_distortion_from({k.begin() + 4, k.end()}, what);
+  return true;
+}
+
+}  // namespace
+
 LensDistortion apply_intrinsics(splat::Camera& cam, const std::string& text) {
-  std::stringstream ss(text);
-  std::vector<double> v;
-  for (std::string item; v.size() < 10 && std::getline(ss, item, ',');) {
-    char* end = nullptr;
-    v.push_back(std::strtod(item.c_str(), &end));
-    if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.clear(), v.push_back(-1);
-  }
-  if ((v.size() != 4 && v.size() != 8 && v.size() != 9) || v[0] <= 0 || v[1] <= 0) {
+  const std::vector<double> v = parse_numbers(text, ',', 10);
+  LensDistortion distortion;
+  // Every item a finite number, here where the text is a command line's.
+  const bool finite = std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  if (!finite || !camera_from_numbers(cam, distortion, v, "intrinsics '" + text + "'")) {
     throw splat::Error(
         "intrinsics '" + text +
         "': expected fx,fy,cx,cy, optionally followed by the distortion k1,k2,p1,p2[,k3]");
   }
-  cam.fx = v[0];
-  cam.fy = v[1];
-  cam.cx = v[2];
-  cam.cy = v[3];
-  if (v.size() == 4) return {};
-  return lens_distortion_from({v.begin() + 4, v.end()}, "intrinsics '" + text + "'");
+  return distortion;
 }
 
 LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::path& path) {
@@ -458,24 +473,16 @@ LensDistortion read_intrinsics_file(splat::Camera& cam, const std::filesystem::p
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
   text.resize(static_cast<std::size_t>(in.gcount()));
   if (!in.eof()) fail(path, "over 4 KiB: not 'fx fy cx cy [k1 k2 p1 p2 [k3]]'");
-  std::istringstream words(text);
-  std::vector<double> k;
-  for (std::string word; k.size() < 10 && words >> word;) {
-    char* end = nullptr;
-    k.push_back(std::strtod(word.c_str(), &end));
-    if (*end != '\0' || !std::isfinite(k.back())) k.back() = std::nan("");
-  }
-  const bool ok = (k.size() == 4 || k.size() == 8 || k.size() == 9) && k[0] > 0 && k[1] > 0 &&
-                  std::isfinite(k[2]) && std::isfinite(k[3]);
-  if (!ok)
-    fail(path, "expected 'fx fy cx cy', optionally followed by the distortion 'k1 k2 p1 p2 [k3]'");
-  cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
-  if (k.size() == 4) return {};
+  LensDistortion distortion;
+  bool ok = false;
   try {
-    return lens_distortion_from({k.begin() + 4, k.end()}, path.string());
+    ok = camera_from_numbers(cam, distortion, parse_numbers(text, ' ', 10), path.string());
   } catch (const splat::Error& e) {
     fail(path, std::string(e.what()).substr(path.string().size() + 2));
   }
+  if (!ok)
+    fail(path, "expected 'fx fy cx cy', optionally followed by the distortion 'k1 k2 p1 p2 [k3]'");
+  return distortion;
 }
 
 std::string intrinsics_text(const splat::Camera& camera, const LensDistortion& distortion) {
@@ -519,8 +526,7 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   if (recording) {
     d = open_bag(root, options);
     if (!options.intrinsics.empty()) {
-      d.distortion = apply_intrinsics(d.intrinsics, options.intrinsics);
-      d.camera_source = "--intrinsics " + options.intrinsics;
+      use_given_intrinsics(d, options.intrinsics);
     }
     if (options.gt_frames.empty()) attach_ground_truth(d, root.parent_path() / "groundtruth.txt");
   } else if (std::filesystem::exists(root / "rgb.txt") && std::filesystem::exists(root / "depth.txt")) {

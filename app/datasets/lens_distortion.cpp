@@ -42,15 +42,24 @@ std::vector<Eigen::Vector2d> undistort_normalized(const LensDistortion& d,
   return result;
 }
 
-LensDistortion parse_lens_distortion(const std::string& text) {
-  std::vector<double> c;
-  std::stringstream ss(text);
-  for (std::string item; c.size() < 64 && std::getline(ss, item, ',');) {
+std::vector<double> parse_numbers(const std::string& text, char separator, std::size_t cap) {
+  std::vector<double> numbers;
+  std::istringstream in(text);
+  std::string item;
+  const auto next = [&] {
+    return separator == ' ' ? static_cast<bool>(in >> item)
+                            : static_cast<bool>(std::getline(in, item, separator));
+  };
+  while (numbers.size() < cap && next()) {
     char* end = nullptr;
-    c.push_back(std::strtod(item.c_str(), &end));
-    if (item.empty() || *end != '\0') c.back() = std::nan("");
+    numbers.push_back(std::strtod(item.c_str(), &end));
+    if (item.empty() || *end != '\0') numbers.back() = std::nan("");
   }
-  return lens_distortion_from(c, "distortion '" + text + "'");
+  return numbers;
+}
+
+LensDistortion parse_lens_distortion(const std::string& text) {
+  return lens_distortion_from(parse_numbers(text, ',', 64), "distortion '" + text + "'");
 }
 
 LensDistortion lens_distortion_from_ros(const std::string& model, const std::vector<double>& d,
@@ -89,10 +98,6 @@ void remap_plane(std::vector<T>& data, int width, int height, int type, int chan
   cv::remap(in, out, map_x, map_y, interpolation, cv::BORDER_REPLICATE);
   std::copy(out.ptr<T>(), out.ptr<T>() + data.size(), data.begin());
 }
-
-}  // namespace
-
-namespace {
 
 // Whether the lens maps radii monotonically out to `reach` (normalized, distorted): past its peak
 // a radial polynomial shows points nearer the axis again.
@@ -155,10 +160,10 @@ void remap_depth(std::vector<float>& depth, int w, int h, const cv::Mat& map_x,
 Undistortion::Undistortion(const splat::Camera& raw, const LensDistortion& d,
                            const std::string& where)
     : raw_(raw), distortion_(d) {
+  raw.validate(where);
   const cv::Size size(raw.width, raw.height);
   const cv::Matx33d K = opencv_matrix(raw);
   const std::vector<double> D = d.coefficients();
-  raw.validate(where);
   // Out to the raw image's farthest edge: the pinhole view lies inside the edges, and a model
   // fitted without data in the corners (barrel lenses with k1 alone) may fold only there.
   const double reach = std::max(std::max(raw.cx, raw.width - raw.cx) / raw.fx,
@@ -169,14 +174,15 @@ Undistortion::Undistortion(const splat::Camera& raw, const LensDistortion& d,
     cv::Matx33d P = cv::getOptimalNewCameraMatrix(K, D, size, 0.0, size);
     // OpenCV finds the view on a coarse grid of the border: zoom in until no pixel looks past
     // the raw image's outer pixel centres (so none is made up by the border rule).
-    for (int step = 0; step < 50; ++step) {
+    bool inside = false;
+    for (int step = 0; step < 50 && !inside; ++step) {
       cv::initUndistortRectifyMap(K, D, cv::noArray(), P, size, CV_32FC1, maps->x, maps->y);
       const double out = overshoot(maps->x, maps->y);
-      if (out <= 1e-3) break;
+      inside = out <= 1e-3;
       const double zoom = 1 + (out + 0.01) / (0.5 * std::min(raw.width, raw.height));
-      P(0, 0) *= zoom, P(1, 1) *= zoom;
-      usable = step < 49;
+      if (!inside) P(0, 0) *= zoom, P(1, 1) *= zoom;
     }
+    usable = inside;
     pinhole_ = raw;
     pinhole_.fx = P(0, 0), pinhole_.fy = P(1, 1), pinhole_.cx = P(0, 2) + 0.5,
     pinhole_.cy = P(1, 2) + 0.5;

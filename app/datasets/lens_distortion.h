@@ -32,6 +32,10 @@ LensDistortion lens_distortion_from(const std::vector<double>& coefficients,
 std::vector<Eigen::Vector2d> undistort_normalized(const LensDistortion& distortion,
                                                   const std::vector<Eigen::Vector2d>& distorted);
 
+// The numbers of a camera's text ("fx,fy,cx,cy,...", intrinsics.txt), split at `separator` (' ':
+// any white space), at most `cap` of them; an empty or unreadable item is NaN.
+std::vector<double> parse_numbers(const std::string& text, char separator, std::size_t cap);
+
 // "k1,k2,p1,p2[,k3]"; throws splat::Error naming the text.
 LensDistortion parse_lens_distortion(const std::string& text);
 
