@@ -38,6 +38,8 @@ std::vector<Field> fields(SlamConfig& c) {
       {"", "refine_iterations", &c.refine_iterations},
       {"", "refine_max_visits", &c.refine_max_visits},
       {"", "refine_all_frames", &c.refine_all_frames},
+      {"", "refine_coarse_passes", &c.refine_coarse_passes},
+      {"", "refine_coarse_learning_rate_scale", &c.refine_coarse_learning_rate_scale},
       {"", "refine_densify_passes", &c.refine_densify_passes},
       {"", "refine_blur_samples", &c.refine_blur_samples},
       {"", "refine_cache_mib", &c.refine_cache_mib},

@@ -23,6 +23,8 @@ void SlamConfig::validate() const {
   check.in_range("refine_blur_samples", refine_blur_samples, 1, 16);
   check.at_least("refine_max_visits", refine_max_visits, 0);
   check.at_least("refine_cache_mib", refine_cache_mib, 0.0);
+  check.at_least("refine_coarse_passes", refine_coarse_passes, 0);
+  check.positive("refine_coarse_learning_rate_scale", refine_coarse_learning_rate_scale);
   check.at_least("relocalize_iterations", relocalize_iterations, 0);
   check.at_least("mapping_backlog_mib", mapping_backlog_mib, 0.0);
   check.at_least("loop_closure.min_separation", loop_closure.min_separation, 1);
@@ -59,6 +61,12 @@ SlamConfig::SweepVisits SlamConfig::sweep_visits(std::size_t frames) const {
   v.densifying = frames * std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
   const auto cap = static_cast<std::size_t>(std::max(refine_max_visits, 0));
   v.total = v.densifying + std::min(frames * passes - v.densifying, cap > v.densifying ? cap - v.densifying : 0);
+  // The coarse passes' share of the passes after the densifying ones, of the visits after them.
+  const std::size_t later_passes =
+      passes - std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
+  const std::size_t coarse_passes =
+      std::min(later_passes, static_cast<std::size_t>(std::max(refine_coarse_passes, 0)));
+  if (later_passes > 0) v.coarse = (v.total - v.densifying) * coarse_passes / later_passes;
   return v;
 }
 

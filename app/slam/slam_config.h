@@ -74,12 +74,19 @@ struct SlamConfig {
   // After the last frame (offline runs) the map is swept over the tracked frames this many times
   // in shuffled order, `refine_iterations` map steps per visit: the bounded mapping window lets
   // later keyframes degrade what earlier ones saw.
-  int refine_passes = 12;
+  int refine_passes = 7;
   int refine_iterations = 1;  // more steps per visit at the same rates rendered worse
   // The sweep's visits after its densifying passes stop at this many in all, so a long recording
   // sweeps about as long as a short one (2,400 visits: 2 minutes at 640x480 on 2 cores; teddy and
-  // 7-Scenes, 200 frames x 12 passes, stay under it). Further visits go round the frames evenly.
+  // 7-Scenes, 200 frames x 7 passes, stay under it). Further visits go round the frames evenly.
   int refine_max_visits = 2400;
+  // Of the passes after the densifying ones, the first this many visit at half the sweep's
+  // resolution, with Adam's rates at refine_coarse_learning_rate_scale times the window steps'
+  // (mapping.refine_learning_rate_scale for the others): large cheap steps first, fine ones last
+  // (a coarse visit costs 57% of one at full sweep resolution; docs/tuning.md). Under
+  // refine_max_visits they keep their share of the visits.
+  int refine_coarse_passes = 4;
+  double refine_coarse_learning_rate_scale = 4.0;
   // Sweep every tracked frame (true) or the keyframes alone: more viewpoints for the same steps.
   bool refine_all_frames = true;
   // The first this many passes also densify each visited frame, covering what no keyframe saw.
@@ -112,10 +119,11 @@ struct SlamConfig {
   LoopClosureConfig loop_closure;
 
   struct SweepVisits {
-    std::size_t densifying = 0, total = 0;  // the first `densifying` visits densify
+    // The first `densifying` visits densify, the `coarse` after them are coarse.
+    std::size_t densifying = 0, coarse = 0, total = 0;
   };
   // The final sweep's visits over this many frames (refine_passes, refine_densify_passes,
-  // refine_max_visits).
+  // refine_coarse_passes, refine_max_visits).
   SweepVisits sweep_visits(std::size_t frames) const;
 
   // Throws splat::Error naming the first field out of range ("mapping.window: expected an

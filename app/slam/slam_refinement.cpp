@@ -130,8 +130,16 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
     }
     const std::size_t i = order[next++];
     Eigen::Isometry3d T_cam_world = T_world_cam[i].inverse();
-    mapper_.refine(frame_at(i), T_cam_world, i == world_frame ? nullptr : &poses[i], config_.refine_iterations,
-                   v < visits.densifying, i, motion[i]);
+    mapping::PoseAdam* pose = i == world_frame ? nullptr : &poses[i];
+    if (v >= visits.densifying && v < visits.densifying + visits.coarse) {
+      // Not the sweep cache's frame (no frame_id): a smaller one, made anew on each visit.
+      mapper_.refine(splat::downsample(frame_at(i), 2), T_cam_world, pose,
+                     config_.refine_iterations, false, std::nullopt, motion[i],
+                     config_.refine_coarse_learning_rate_scale);
+    } else {
+      mapper_.refine(frame_at(i), T_cam_world, pose, config_.refine_iterations,
+                     v < visits.densifying, i, motion[i]);
+    }
     T_world_cam[i] = T_cam_world.inverse();
     if (mapper_.size() != published) publish(), published = mapper_.size();
     if (visited) visited(++result.visits, visits.total);

@@ -203,8 +203,10 @@ void Mapper::step_vignetting(const std::array<double, 2>& gradient) {
   vignetting_.k2 = k[1];
 }
 
-double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key) {
-  const splat::MappingStepResult result = device_ ? device_step(kf, device_key, step) : host_step(kf, step);
+double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key,
+                             double rate_scale) {
+  const splat::MappingStepResult result =
+      device_ ? device_step(kf, device_key, step, rate_scale) : host_step(kf, step, rate_scale);
   if (step == Step::kRefine && config_.refine_vignetting_rate > 0) step_vignetting(result.d_loss_d_vignetting);
   if (step == Step::kWindow && kf.number != 0) {  // the first keyframe is the world frame
     step_pose(kf.T_cam_world, kf.pose, result.d_loss_d_pose, config_.pose_learning_rate, config_.pose_rotation_learning_rate);
@@ -215,7 +217,8 @@ double Mapper::optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t d
   return result.loss;
 }
 
-splat::MappingStepResult Mapper::device_step(const Keyframe& kf, uint64_t key, Step step) {
+splat::MappingStepResult Mapper::device_step(const Keyframe& kf, uint64_t key, Step step,
+                                             double rate_scale) {
   splat::MappingLoss loss;
   loss.color_weight = config_.color_weight;
   loss.ssim_weight = config_.ssim_weight;
@@ -226,13 +229,13 @@ splat::MappingStepResult Mapper::device_step(const Keyframe& kf, uint64_t key, S
   const AdamConfig& a = adam_.config();
   const splat::AdamRates rates{a.means, a.log_scales, a.rotations, a.opacity_logits, a.sh_dc, a.sh_rest, a.hyper};
   const splat::MappingStepResult result =
-      device_->step(key, splat::posed(kf.frame.camera, kf.T_cam_world), loss, rates,
-                    step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale, config_.isotropic);
+      device_->step(key, splat::posed(kf.frame.camera, kf.T_cam_world), loss, rates, rate_scale,
+                    config_.isotropic);
   device_changed();
   return result;
 }
 
-splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
+splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step, double rate_scale) {
   const splat::RgbdFrame& f = kf.frame;
   // The views across the exposure, and the images the camera would have recorded: their mean.
   const int samples = kf.motion.samples;
@@ -316,7 +319,7 @@ splat::MappingStepResult Mapper::host_step(const Keyframe& kf, Step step) {
     }
     std::fill(grads.rotations.begin(), grads.rotations.end(), 0.f);
   }
-  adam_.step(map_, grads, step == Step::kWindow ? 1.0 : config_.refine_learning_rate_scale, rasterizer_.host_threads());
+  adam_.step(map_, grads, rate_scale, rasterizer_.host_threads());
   return result;
 }
 
@@ -448,8 +451,10 @@ void Mapper::release_sweep_frames() {
   sweep_frames_mib_ = 0;
 }
 
-double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                      int iterations, bool densify_first, std::optional<std::size_t> frame_id, const ExposureMotion& motion) {
+double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world,
+                      PoseAdam* pose, int iterations, bool densify_first,
+                      std::optional<std::size_t> frame_id, const ExposureMotion& motion,
+                      std::optional<double> learning_rate_scale) {
   if (size() == 0) return 0;
   if (motion.samples < 1 || !motion.twist.allFinite()) {
     throw splat::Error("Mapper::refine: exposure motion needs samples >= 1 and a finite twist, got " + std::to_string(motion.samples) + " samples");
@@ -461,7 +466,13 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
     densify(kf.frame, key, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   }
   double loss = 0;
-  for (int it = 0; it < iterations; ++it) loss = optimize_step(kf, Step::kRefine, pose, key);
+  const double rate_scale = learning_rate_scale.value_or(config_.refine_learning_rate_scale);
+  if (!(rate_scale > 0) || !std::isfinite(rate_scale)) {
+    throw splat::Error("Mapper::refine: the learning rate scale must be finite and > 0, got " +
+                       std::to_string(rate_scale));
+  }
+  for (int it = 0; it < iterations; ++it)
+    loss = optimize_step(kf, Step::kRefine, pose, key, rate_scale);
   T_cam_world = kf.T_cam_world;
   return loss;
 }
@@ -596,7 +607,7 @@ MappingStats Mapper::add_keyframe(const splat::RgbdFrame& frame, const Eigen::Is
   std::uniform_int_distribution<std::size_t> pick(0, window.size() - 1);
   for (int it = 0; it < config_.iterations && size() > 0; ++it) {
     Keyframe& kf = it % 2 == 0 ? newest : *window[pick(rng_)];
-    stats.final_loss = optimize_step(kf, Step::kWindow, nullptr, kf.number);
+    stats.final_loss = optimize_step(kf, Step::kWindow, nullptr, kf.number, 1.0);
     ++stats.iterations;
   }
   const Pruned pruned = prune();

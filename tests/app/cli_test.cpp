@@ -1,5 +1,7 @@
 // The gslam executable end to end: outputs on good input, one-line errors and non-zero exits
 // on bad input.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,14 +9,13 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include <gtest/gtest.h>
-
+#include "app/run_gslam.h"
 #include "datasets/synthetic_sequence.h"
 #include "io/image_io.h"
 #include "io/ply_io.h"
 #include "io/run_folder.h"
-#include "app/run_gslam.h"
 #include "io/trajectory.h"
+#include "slam/slam_config.h"
 #include "support/golden_case.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
@@ -299,7 +300,8 @@ TEST(CliReconstruct, PrintedConfigReadsBackAndBadConfigIsRefusedByName) {
   const RunResult printed = run_gslam("reconstruct --print-config");
   ASSERT_EQ(printed.exit_code, 0) << printed.output;
   const nlohmann::json config = nlohmann::json::parse(printed.output);
-  EXPECT_EQ(config.at("refine_passes").get<int>(), 12);
+  EXPECT_EQ(config.at("refine_passes").get<int>(), app::SlamConfig{}.refine_passes);
+  EXPECT_EQ(config.at("refine_coarse_passes").get<int>(), app::SlamConfig{}.refine_coarse_passes);
   EXPECT_EQ(config.at("mapping").at("iterations").get<int>(), 20);
   gslam::test::write_text(dir / "printed.json", printed.output);
   const RunResult again = run_gslam("reconstruct --print-config --config " + (dir / "printed.json").string());

@@ -77,6 +77,26 @@ TEST(SlamConfigFile, SweepVisitsStopAtTheCapAfterTheDensifyingPasses) {
   EXPECT_EQ(c.sweep_visits(10).total, 0u) << "no passes, no visits";
 }
 
+// The coarse passes come right after the densifying ones; under the cap they keep their share of
+// the later visits, so the last visits stay at the sweep's full resolution.
+TEST(SlamConfigFile, CoarseVisitsKeepTheirShareOfTheLaterPasses) {
+  app::SlamConfig c;
+  c.refine_passes = 7;
+  c.refine_densify_passes = 1;
+  c.refine_coarse_passes = 4;
+  c.refine_max_visits = 2400;
+  EXPECT_EQ(c.sweep_visits(193).coarse, 193u * 4) << "under the cap: whole passes";
+  EXPECT_EQ(c.sweep_visits(700).total, 2400u);
+  EXPECT_EQ(c.sweep_visits(700).coarse, (2400u - 700) * 4 / 6) << "4 of the 6 later passes' share";
+  c.refine_coarse_passes = 9;
+  EXPECT_EQ(c.sweep_visits(193).coarse, 193u * 6) << "at most every later pass";
+  c.refine_coarse_passes = 0;
+  EXPECT_EQ(c.sweep_visits(193).coarse, 0u);
+  c.refine_coarse_passes = 4;
+  c.refine_densify_passes = 7;
+  EXPECT_EQ(c.sweep_visits(193).coarse, 0u) << "no later passes";
+}
+
 // What --print-config writes, --config reads back unchanged, non-default values included.
 TEST(SlamConfigFile, PrintedConfigurationReadsBackUnchanged) {
   app::SlamConfig c;
@@ -123,6 +143,10 @@ TEST(SlamConfigFile, RefusesOutOfRangeValuesNamingFieldValueAndRange) {
   expect_refused(R"({"tracking": {"pyramid": [4, 0], "iterations": [1, 1]}})", "tracking.pyramid: expected an integer >= 1, got 0");
   expect_refused(R"({"tracking": {"pyramid": [4, 2, 1]}})", "tracking.iterations: expected one count per pyramid level (3), got 2 counts");
   expect_refused(R"({"refine_cache_mib": -1})", "refine_cache_mib: expected a number >= 0, got -1");
+  expect_refused(R"({"refine_coarse_passes": -1})",
+                 "refine_coarse_passes: expected an integer >= 0, got -1");
+  expect_refused(R"({"refine_coarse_learning_rate_scale": 0})",
+                 "refine_coarse_learning_rate_scale: expected a number > 0, got 0");
   expect_refused(R"({"keyframe_every": 0})", "keyframe_every: expected an integer >= 1, got 0");
 }
 

@@ -156,10 +156,13 @@ class Mapper {
   // with that Adam state; otherwise it stays.
   // `frame_id` names the frame for the device's sweep cache (sweep_device_cache_mib): the same
   // id must always come with the same frame, until release_sweep_frames(). The frame's motion
-  // blur is rendered as `motion` says.
-  double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world, PoseAdam* pose,
-                int iterations, bool densify = false, std::optional<std::size_t> frame_id = std::nullopt,
-                const ExposureMotion& motion = {});
+  // blur is rendered as `motion` says. Adam's rates are `learning_rate_scale` times the window
+  // steps' (refine_learning_rate_scale where not given).
+  double refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3d& T_cam_world,
+                PoseAdam* pose, int iterations, bool densify = false,
+                std::optional<std::size_t> frame_id = std::nullopt,
+                const ExposureMotion& motion = {},
+                std::optional<double> learning_rate_scale = std::nullopt);
   // Frees the device's copies of the sweep's frames.
   void release_sweep_frames();
   // An input frame as refine() takes it: at refine_resolution_factor.
@@ -212,16 +215,19 @@ class Mapper {
   // the world frame's); refinement steps use refine_depth_alpha_threshold and move the pose
   // where `pose` is given.
   enum class Step { kWindow, kRefine };
-  // `device_key`: where the device stores kf's frame.
-  double optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key);
+  // `device_key`: where the device stores kf's frame; `rate_scale`: Adam's rates relative to
+  // the configured ones.
+  double optimize_step(Keyframe& kf, Step step, PoseAdam* pose, uint64_t device_key,
+                       double rate_scale);
   // The device key of a frame refine() fits: its sweep-cache key if stored there (or room is
   // left to store it), else the one refine frame's, uploaded now.
   uint64_t store_refinement_frame(const splat::RgbdFrame& frame, std::optional<std::size_t> frame_id);
   // optimize_step's loss on the device map (the target stored under `key`); returns the loss and
   // the pose gradient.
-  splat::MappingStepResult device_step(const Keyframe& kf, uint64_t key, Step step);
+  splat::MappingStepResult device_step(const Keyframe& kf, uint64_t key, Step step,
+                                       double rate_scale);
   // optimize_step's loss on the host (the reference), then the map's Adam step.
-  splat::MappingStepResult host_step(const Keyframe& kf, Step step);
+  splat::MappingStepResult host_step(const Keyframe& kf, Step step, double rate_scale);
   // The free-space test's settings (ghost_views): one place for the host's and the device's.
   splat::ResidentMap::FreeSpaceTest free_space_test() const;
   // Adds one view's free-space verdicts, of the Gaussians from `first` on, to their counts.
