@@ -58,12 +58,13 @@ void SlamConfig::validate() const {
 SlamConfig::SweepVisits SlamConfig::sweep_visits(std::size_t frames) const {
   const auto passes = static_cast<std::size_t>(std::max(refine_passes, 0));
   SweepVisits v;
-  v.densifying = frames * std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
+  const std::size_t densify_passes =
+      std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
+  v.densifying = frames * densify_passes;
   const auto cap = static_cast<std::size_t>(std::max(refine_max_visits, 0));
   v.total = v.densifying + std::min(frames * passes - v.densifying, cap > v.densifying ? cap - v.densifying : 0);
   // The coarse passes' share of the passes after the densifying ones, of the visits after them.
-  const std::size_t later_passes =
-      passes - std::min(passes, static_cast<std::size_t>(std::max(refine_densify_passes, 0)));
+  const std::size_t later_passes = passes - densify_passes;
   const std::size_t coarse_passes =
       std::min(later_passes, static_cast<std::size_t>(std::max(refine_coarse_passes, 0)));
   if (later_passes > 0) v.coarse = (v.total - v.densifying) * coarse_passes / later_passes;

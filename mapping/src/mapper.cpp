@@ -456,6 +456,11 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
                       std::optional<std::size_t> frame_id, const ExposureMotion& motion,
                       std::optional<double> learning_rate_scale) {
   if (size() == 0) return 0;
+  const double rate_scale = learning_rate_scale.value_or(config_.refine_learning_rate_scale);
+  if (!(rate_scale > 0) || !std::isfinite(rate_scale)) {
+    throw splat::Error("Mapper::refine: the learning rate scale must be finite and > 0, got " +
+                       std::to_string(rate_scale));
+  }
   if (motion.samples < 1 || !motion.twist.allFinite()) {
     throw splat::Error("Mapper::refine: exposure motion needs samples >= 1 and a finite twist, got " + std::to_string(motion.samples) + " samples");
   }
@@ -466,11 +471,6 @@ double Mapper::refine(const splat::RgbdFrame& refinement_frame, Eigen::Isometry3
     densify(kf.frame, key, kf.T_cam_world, config_.refine_seed_depth_holes, added_ > 0 ? added_ - 1 : 0);
   }
   double loss = 0;
-  const double rate_scale = learning_rate_scale.value_or(config_.refine_learning_rate_scale);
-  if (!(rate_scale > 0) || !std::isfinite(rate_scale)) {
-    throw splat::Error("Mapper::refine: the learning rate scale must be finite and > 0, got " +
-                       std::to_string(rate_scale));
-  }
   for (int it = 0; it < iterations; ++it)
     loss = optimize_step(kf, Step::kRefine, pose, key, rate_scale);
   T_cam_world = kf.T_cam_world;
