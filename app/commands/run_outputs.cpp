@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <future>
+#include <memory>
 
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
@@ -217,7 +219,6 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
   if (!map.empty()) {
     files.insert(files.end(), {"map.ply", "map.glb"});
     const splat::GaussianLabels* labels = labels_.size() == map.size() ? &labels_ : nullptr;
-    save_map(out_ / "map.ply", map, Eigen::Quaterniond::Identity(), labels);
     // The world's up (the floor's normal, else the cameras'), recorded and standing map.glb
     // upright in glTF's axes (+Y up).
     Eigen::Quaterniond gltf_from_world = Eigen::Quaterniond::Identity();
@@ -230,21 +231,40 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
     } catch (const splat::Error& e) {  // no poses, or cameras that agree on no up: map.glb as it is
       extra_["world_up_unavailable"] = e.what();
     }
-    save_map(out_ / "map.glb", map, gltf_from_world, labels);
+    // Files are written on their own threads while the keyframes render: compressing them took
+    // most of this (one core) and rendering uses the others.
+    std::future<void> maps = std::async(std::launch::async, [&] {
+      save_map(out_ / "map.ply", map, Eigen::Quaterniond::Identity(), labels);
+      save_map(out_ / "map.glb", map, gltf_from_world, labels);
+    });
     // The final map seen from every keyframe.
     std::filesystem::create_directories(out_ / "keyframes");
+    std::future<void> png, exr;  // the previous keyframe's files, each on a core of its own
     for (std::size_t i = 0; i < records_.size() && !stopping_; ++i) {
       if (!records_[i].keyframe) continue;
       const splat::Camera cam = splat::posed(intrinsics, records_[i].T_world_cam.inverse());
-      const splat::ForwardResult f = rasterizer.forward(map, cam, splat::images_only());
+      auto f = std::make_shared<const splat::ForwardResult>(
+          rasterizer.forward(map, cam, splat::images_only()));
       char name[32];
       std::snprintf(name, sizeof(name), "kf_%04zu", i);
-      write_png_rgb(out_ / "keyframes" / (std::string(name) + ".png"), f.width, f.height, f.rgb);
+      const std::filesystem::path stem = out_ / "keyframes" / name;
       files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".png"));
       files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".exr"));
-      write_render_exr(out_ / "keyframes" / (std::string(name) + ".exr"), f.width, f.height, f.rgb,
-                       f.alpha, f.depth_normalized);
+      for (std::future<void>* previous : {&png, &exr}) {
+        if (previous->valid()) previous->get();
+      }
+      png = std::async(std::launch::async, [f, stem] {
+        write_png_rgb(std::filesystem::path(stem) += ".png", f->width, f->height, f->rgb);
+      });
+      exr = std::async(std::launch::async, [f, stem] {
+        write_render_exr(std::filesystem::path(stem) += ".exr", f->width, f->height, f->rgb,
+                         f->alpha, f->depth_normalized);
+      });
     }
+    for (std::future<void>* last : {&png, &exr}) {
+      if (last->valid()) last->get();
+    }
+    maps.get();
   }
   if (!truth.empty()) {
     try {

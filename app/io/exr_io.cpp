@@ -1,13 +1,16 @@
+#include <Imath/half.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
-#include <Imath/half.h>
+#include <OpenEXR/ImfThreading.h>
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 #include <vector>
+
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "splat/error.h"
@@ -57,7 +60,13 @@ void write_render_exr(const std::filesystem::path& path, int width, int height,
       }
       header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
       fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth.data())), sizeof(float), sizeof(float) * width));
-      Imf::OutputFile file(tmp.c_str(), header);
+      // Compressing is most of the time: its blocks of lines go to every core.
+      static const bool threaded = [] {
+        Imf::setGlobalThreadCount(
+            static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+        return true;
+      }();
+      Imf::OutputFile file(tmp.c_str(), header, threaded ? Imf::globalThreadCount() : 1);
       file.setFrameBuffer(fb);
       file.writePixels(height);
     } catch (const std::exception& e) {

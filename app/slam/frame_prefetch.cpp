@@ -6,7 +6,7 @@
 namespace app {
 
 FramePrefetch::FramePrefetch(Load load, std::vector<std::size_t> order) : load_(std::move(load)), order_(std::move(order)) {
-  start(0);
+  fill();
 }
 
 FramePrefetch::FramePrefetch(Load load, std::size_t first, std::size_t end)
@@ -17,22 +17,24 @@ FramePrefetch::FramePrefetch(Load load, std::size_t first, std::size_t end)
       }()) {}
 
 FramePrefetch::~FramePrefetch() {
-  if (ahead_.valid()) ahead_.wait();
+  for (std::future<splat::RgbdFrame>& read : ahead_) read.wait();
 }
 
-void FramePrefetch::start(std::size_t position) {
-  if (position >= order_.size()) return;
-  position_ = position;
-  ahead_ = std::async(std::launch::async, load_, order_[position]);
+void FramePrefetch::fill() {
+  while (ahead_.size() < kAhead && position_ + ahead_.size() < order_.size()) {
+    ahead_.push_back(std::async(std::launch::async, load_, order_[position_ + ahead_.size()]));
+  }
 }
 
 splat::RgbdFrame FramePrefetch::take(std::size_t i) {
-  if (!ahead_.valid() || order_[position_] != i) return load_(i);  // the read ahead stays for its turn
-  // get() leaves the future empty, so an error is thrown once, and no read is left running.
-  const std::size_t next = position_ + 1;
-  splat::RgbdFrame frame = ahead_.get();
-  start(next);
-  return frame;
+  if (ahead_.empty() || order_[position_] != i)
+    return load_(i);  // the reads ahead stay for their turn
+  // Taken out before get(), so an error is thrown once and the reads after it go on.
+  std::future<splat::RgbdFrame> read = std::move(ahead_.front());
+  ahead_.pop_front();
+  ++position_;
+  fill();
+  return read.get();
 }
 
 }  // namespace app

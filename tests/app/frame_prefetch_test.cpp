@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -36,6 +38,7 @@ TEST(FramePrefetch, GivesEachFrameInOrderReadOnceAndNothingPastTheEnd) {
     app::FramePrefetch prefetch(reads.load(), 3, 8);
     for (std::size_t i = 3; i < 8; ++i) EXPECT_EQ(prefetch.take(i).timestamp, static_cast<double>(i));
   }
+  std::sort(reads.indices.begin(), reads.indices.end());  // reads run side by side
   EXPECT_EQ(reads.indices, (std::vector<std::size_t>{3, 4, 5, 6, 7}));
 }
 
@@ -51,6 +54,33 @@ TEST(FramePrefetch, FollowsAnOrderAndReadsFramesTakenOutOfItThemselves) {
   }
   std::sort(reads.indices.begin(), reads.indices.end());
   EXPECT_EQ(reads.indices, (std::vector<std::size_t>{1, 4, 4, 6, 7}));
+}
+
+// The first frame's read finishes only once the second's has begun: with one read at a time it
+// would wait for its bound and fail.
+TEST(FramePrefetch, ReadsTwoFramesAtOnce) {
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool second_started = false;
+  bool waited_out = false;
+  app::FramePrefetch::Load load = [&](std::size_t i) {
+    std::unique_lock lock(mutex);
+    if (i == 1) {
+      second_started = true;
+      changed.notify_all();
+    } else if (i == 0) {
+      waited_out =
+          !changed.wait_for(lock, std::chrono::seconds(60), [&] { return second_started; });
+    }
+    splat::RgbdFrame frame;
+    frame.timestamp = static_cast<double>(i);
+    return frame;
+  };
+  app::FramePrefetch prefetch(load, 0, 3);
+  EXPECT_EQ(prefetch.take(0).timestamp, 0.0);
+  EXPECT_FALSE(waited_out) << "frame 1 was not read while frame 0 was";
+  EXPECT_EQ(prefetch.take(1).timestamp, 1.0);
+  EXPECT_EQ(prefetch.take(2).timestamp, 2.0);
 }
 
 TEST(FramePrefetch, ThrowsAFramesReadErrorWhenThatFrameIsTaken) {
