@@ -240,6 +240,11 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
     // The final map seen from every keyframe.
     std::filesystem::create_directories(out_ / "keyframes");
     std::future<void> png, exr;  // the previous keyframe's files, each on a core of its own
+    const auto written = [&] {
+      for (std::future<void>* file : {&png, &exr}) {
+        if (file->valid()) file->get();
+      }
+    };
     for (std::size_t i = 0; i < records_.size() && !stopping_; ++i) {
       if (!records_[i].keyframe) continue;
       const splat::Camera cam = splat::posed(intrinsics, records_[i].T_world_cam.inverse());
@@ -250,9 +255,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
       const std::filesystem::path stem = out_ / "keyframes" / name;
       files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".png"));
       files.push_back(std::filesystem::path("keyframes") / (std::string(name) + ".exr"));
-      for (std::future<void>* previous : {&png, &exr}) {
-        if (previous->valid()) previous->get();
-      }
+      written();
       png = std::async(std::launch::async, [f, stem] {
         write_png_rgb(std::filesystem::path(stem) += ".png", f->width, f->height, f->rgb);
       });
@@ -261,9 +264,7 @@ void RunOutputs::finish(const splat::Gaussians& map, std::size_t keyframes,
                          f->alpha, f->depth_normalized);
       });
     }
-    for (std::future<void>* last : {&png, &exr}) {
-      if (last->valid()) last->get();
-    }
+    written();
     maps.get();
   }
   if (!truth.empty()) {

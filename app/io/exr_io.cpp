@@ -61,12 +61,12 @@ void write_render_exr(const std::filesystem::path& path, int width, int height,
       header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
       fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth.data())), sizeof(float), sizeof(float) * width));
       // Compressing is most of the time: its blocks of lines go to every core.
-      static const bool threaded = [] {
-        Imf::setGlobalThreadCount(
-            static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-        return true;
+      static const int threads = [] {
+        const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        Imf::setGlobalThreadCount(cores);
+        return cores;
       }();
-      Imf::OutputFile file(tmp.c_str(), header, threaded ? Imf::globalThreadCount() : 1);
+      Imf::OutputFile file(tmp.c_str(), header, threads);
       file.setFrameBuffer(fb);
       file.writePixels(height);
     } catch (const std::exception& e) {

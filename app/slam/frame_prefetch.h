@@ -36,8 +36,8 @@ class FramePrefetch {
   Load load_;
   std::vector<std::size_t> order_;
   std::size_t position_ = 0;  // in order_ of ahead_.front()
-  std::deque<std::future<splat::RgbdFrame>>
-      ahead_;  // order_[position_], order_[position_ + 1], ...
+  // The reads of order_[position_], order_[position_ + 1], ...
+  std::deque<std::future<splat::RgbdFrame>> ahead_;
 };
 
 }  // namespace app
