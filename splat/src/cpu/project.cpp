@@ -17,14 +17,39 @@ struct CameraModel {
   Vec3<T> translation;   // t: p_cam = W p_world + t
   Vec3<T> position;      // camera centre in the world frame, -W^T t
   PerspectiveProjection<T> projection;
+  int width, height;
 
   explicit CameraModel(const Camera& c)
-      : projection(T(c.fx), T(c.fy), T(c.cx), T(c.cy), c.width, c.height, T(io::kFovClampMargin)) {
+      : projection(T(c.fx), T(c.fy), T(c.cx), T(c.cy), c.width, c.height, T(io::kFovClampMargin)),
+        width(c.width),
+        height(c.height) {
     const Eigen::Matrix3d r = c.T_cam_world.linear();
     for (int col = 0; col < 3; ++col)
       for (int row = 0; row < 3; ++row) rotation[col][row] = T(r(row, col));
     for (int i = 0; i < 3; ++i) translation[i] = T(c.T_cam_world.translation()[i]);
     position = -(glm::transpose(rotation) * translation);
+  }
+
+  // True only where the full test below would cull the Gaussian as off screen, without its
+  // covariance: about half a map's Gaussians lie beside the view. cov2d's diagonal is at most
+  // |row of J|^2 times Sigma's largest eigenvalue, exp(2 max log scale), so each bound exceeds
+  // the radius (with a margin for rounding). Bounds over 512 pixels (where rounding could make
+  // cov2d singular), faint Gaussians and NaN take the full test, which labels them.
+  bool surely_offscreen(const Vec3<T>& p, const Vec3<T>& log_scale, T opacity) const {
+    const Vec2<T> m = projection.mean2d(p);
+    if (m.x >= 0 && m.x <= T(width) && m.y >= 0 && m.y <= T(height)) return false;
+    if (!(opacity >= T(io::kAlphaMin))) return false;
+    T u, v;
+    bool u_free, v_free;
+    projection.clamped_ratios(p, u, v, u_free, v_free);
+    const T largest = std::exp(2 * std::max(log_scale.x, std::max(log_scale.y, log_scale.z)));
+    const T extend = std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+    const T fx_z = projection.fx / p.z, fy_z = projection.fy / p.z;
+    const T dilation = T(io::kCov2dDilation);
+    const T bound_x = T(1.001) * extend * std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation) + 1;
+    const T bound_y = T(1.001) * extend * std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation) + 1;
+    if (!(bound_x <= 512 && bound_y <= 512)) return false;
+    return m.x + bound_x <= 0 || m.x - bound_x >= T(width) || m.y + bound_y <= 0 || m.y - bound_y >= T(height);
   }
 };
 
@@ -89,6 +114,10 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
       const T q_len = glm::length(q);
       if (!(q_len > 0)) {
         cull[i] = io::kCullDegenerate;
+        continue;
+      }
+      if (cam.surely_offscreen(p, load3(g.log_scales, i), opacity)) {
+        cull[i] = io::kCullOffscreen;
         continue;
       }
       // EWA: Sigma_cam = W Sigma W^T, cov2d = J Sigma_cam J^T + dilation.
