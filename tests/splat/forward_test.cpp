@@ -1,10 +1,10 @@
 // Analytic and contract checks of the forward pass.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "splat/cpu_reference.h"
 #include "splat/error.h"
@@ -128,8 +128,10 @@ TEST_P(RasterizerContract, SplatsBesideTheViewAreCulledExactlyWhenTheirBoxMisses
   splat::Gaussians g;
   std::vector<int> expected;  // 1 visible, 0 off screen, -1 within rounding of the border
   for (int i = 0; i < 4000; ++i) {
-    const double z = 1 + 3 * unit(rng), sigma = 0.005 * std::pow(40.0, unit(rng)), opacity = 0.02 + 0.97 * unit(rng);
-    const double u = 0.8 * (2 * unit(rng) - 1), v = 0.8 * (2 * unit(rng) - 1);  // x/z, y/z within the clamp
+    const double z = 1 + 3 * unit(rng), sigma = 0.005 * std::pow(40.0, unit(rng)),
+                 opacity = 0.02 + 0.97 * unit(rng);
+    const double u = 0.8 * (2 * unit(rng) - 1),
+                 v = 0.8 * (2 * unit(rng) - 1);  // x/z, y/z within the clamp
     add_splat(g, float(u * z), float(v * z), float(z), float(sigma), float(opacity), 1, 1, 1);
     const double extend = std::min(3.33, std::sqrt(2 * std::log(opacity * 255)));
     // cov2d's diagonal: sigma^2 |row of J|^2 + dilation, J with x/z and y/z clamped to the field
@@ -137,9 +139,11 @@ TEST_P(RasterizerContract, SplatsBesideTheViewAreCulledExactlyWhenTheirBoxMisses
     const double f_z = 50 / z, cu = std::clamp(u, -0.832, 0.832), cv = std::clamp(v, -0.624, 0.624);
     const double reach_x = extend * std::sqrt(sigma * sigma * f_z * f_z * (1 + cu * cu) + 0.3);
     const double reach_y = extend * std::sqrt(sigma * sigma * f_z * f_z * (1 + cv * cv) + 0.3);
-    const double rx = std::ceil(reach_x), ry = std::ceil(reach_y), mx = 50 * u + 32, my = 50 * v + 24;
-    const double gap = std::min({std::abs(mx + rx), std::abs(mx - rx - 64), std::abs(my + ry), std::abs(my - ry - 48),
-                                 reach_x - std::floor(reach_x), reach_y - std::floor(reach_y)});
+    const double rx = std::ceil(reach_x), ry = std::ceil(reach_y), mx = 50 * u + 32,
+                 my = 50 * v + 24;
+    const double gap = std::min({std::abs(mx + rx), std::abs(mx - rx - 64), std::abs(my + ry),
+                                 std::abs(my - ry - 48), reach_x - std::floor(reach_x),
+                                 reach_y - std::floor(reach_y)});
     const bool off = mx + rx <= 0 || mx - rx >= 64 || my + ry <= 0 || my - ry >= 48;
     expected.push_back(gap < 1e-3 ? -1 : off ? 0 : 1);
   }
@@ -150,12 +154,13 @@ TEST_P(RasterizerContract, SplatsBesideTheViewAreCulledExactlyWhenTheirBoxMisses
     ++checked;
     off += expected[i] == 0;
     const bool visible = f.radii[i * 2] > 0 || f.radii[i * 2 + 1] > 0;
-    ASSERT_EQ(visible, expected[i] == 1) << "splat " << i << " at (" << g.means[i * 3] << ", " << g.means[i * 3 + 1]
-                                         << ", " << g.means[i * 3 + 2] << ")";
+    ASSERT_EQ(visible, expected[i] == 1) << "splat " << i << " at (" << g.means[i * 3] << ", "
+                                         << g.means[i * 3 + 1] << ", " << g.means[i * 3 + 2] << ")";
   }
   EXPECT_GT(checked, 3900u);
   EXPECT_GT(off, 500u) << "the scene must hold splats beside the view";
-  EXPECT_EQ(f.stats.visible + f.stats.culled_offscreen, expected.size()) << "none is faint, degenerate or out of depth";
+  EXPECT_EQ(f.stats.visible + f.stats.culled_offscreen, expected.size())
+      << "none is faint, degenerate or out of depth";
 }
 
 TEST_P(RasterizerContract, ZeroQuaternionIsCulledAsDegenerate) {

@@ -43,13 +43,17 @@ struct CameraModel {
     bool u_free, v_free;
     projection.clamped_ratios(p, u, v, u_free, v_free);
     const T largest = std::exp(2 * std::max(log_scale.x, std::max(log_scale.y, log_scale.z)));
-    const T extend = std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+    const T extend =
+        std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
     const T fx_z = projection.fx / p.z, fy_z = projection.fy / p.z;
     const T dilation = T(io::kCov2dDilation);
-    const T bound_x = T(1.001) * extend * std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation) + 1;
-    const T bound_y = T(1.001) * extend * std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation) + 1;
+    const T bound_x =
+        T(1.001) * extend * std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation) + 1;
+    const T bound_y =
+        T(1.001) * extend * std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation) + 1;
     if (!(bound_x <= 512 && bound_y <= 512)) return false;
-    return m.x + bound_x <= 0 || m.x - bound_x >= T(width) || m.y + bound_y <= 0 || m.y - bound_y >= T(height);
+    return m.x + bound_x <= 0 || m.x - bound_x >= T(width) || m.y + bound_y <= 0 ||
+           m.y - bound_y >= T(height);
   }
 };
 
