@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "cpu/math.h"
 #include "cpu/stages.h"
@@ -32,26 +33,28 @@ struct CameraModel {
 
   // True only where the full test below would cull the Gaussian as off screen, without its
   // covariance: about half a map's Gaussians lie beside the view. cov2d's diagonal is at most
-  // |row of J|^2 times Sigma's largest eigenvalue, exp(2 max log scale), so each bound exceeds
-  // the radius (with a margin for rounding). Bounds over 512 pixels (where rounding could make
-  // cov2d singular), faint Gaussians and NaN take the full test, which labels them.
-  bool surely_offscreen(const Vec3<T>& p, const Vec3<T>& log_scale, T opacity) const {
+  // |row of J|^2 times Sigma's largest eigenvalue, exp(2 max log scale), plus the dilation, so
+  // 1.001 (rounding) extend sqrt(that) + 1 (the ceil) exceeds each radius. The map is finite
+  // (validate()). Faint Gaussians, a quaternion whose squared length is subnormal (its unit
+  // quaternion is not unit) and footprints over kSigmaMax pixels (where rounding can make cov2d
+  // singular: degenerate, not off screen) take the full test, which labels them.
+  bool surely_offscreen(const Vec3<T>& p, const Vec4<T>& q, const Vec3<T>& log_scale, T opacity) const {
+    constexpr T kSigmaMax = 256;
     const Vec2<T> m = projection.mean2d(p);
     if (m.x >= 0 && m.x <= T(width) && m.y >= 0 && m.y <= T(height)) return false;
-    if (!(opacity >= T(io::kAlphaMin))) return false;
+    if (!(opacity >= T(io::kAlphaMin)) || !(glm::dot(q, q) >= std::numeric_limits<T>::min())) return false;
     T u, v;
     bool u_free, v_free;
     projection.clamped_ratios(p, u, v, u_free, v_free);
     const T largest = std::exp(2 * std::max(log_scale.x, std::max(log_scale.y, log_scale.z)));
-    const T extend =
-        std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
     const T fx_z = projection.fx / p.z, fy_z = projection.fy / p.z;
     const T dilation = T(io::kCov2dDilation);
-    const T bound_x =
-        T(1.001) * extend * std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation) + 1;
-    const T bound_y =
-        T(1.001) * extend * std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation) + 1;
-    if (!(bound_x <= 512 && bound_y <= 512)) return false;
+    const T sigma_x = std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation);
+    const T sigma_y = std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation);
+    if (!(sigma_x <= kSigmaMax && sigma_y <= kSigmaMax)) return false;
+    const T extend =
+        std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+    const T bound_x = T(1.001) * extend * sigma_x + 1, bound_y = T(1.001) * extend * sigma_y + 1;
     return m.x + bound_x <= 0 || m.x - bound_x >= T(width) || m.y + bound_y <= 0 ||
            m.y - bound_y >= T(height);
   }
@@ -120,7 +123,7 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
         cull[i] = io::kCullDegenerate;
         continue;
       }
-      if (cam.surely_offscreen(p, load3(g.log_scales, i), opacity)) {
+      if (cam.surely_offscreen(p, q, load3(g.log_scales, i), opacity)) {
         cull[i] = io::kCullOffscreen;
         continue;
       }
