@@ -31,6 +31,17 @@ struct CameraModel {
     position = -(glm::transpose(rotation) * translation);
   }
 
+  // Sigmas a footprint reaches: where opacity * exp(-r^2/2) falls to kAlphaMin, at most
+  // kExtentSigmaMax.
+  static T extent(T opacity) {
+    return std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+  }
+  // Whether a box of these half-sizes about m misses the image.
+  bool misses_image(const Vec2<T>& m, T half_x, T half_y) const {
+    return m.x + half_x <= 0 || m.x - half_x >= T(width) || m.y + half_y <= 0 ||
+           m.y - half_y >= T(height);
+  }
+
   // True only where the full test below would cull the Gaussian as off screen, without its
   // covariance: about half a map's Gaussians lie beside the view. cov2d's diagonal is at most
   // |row of J|^2 times Sigma's largest eigenvalue, exp(2 max log scale), plus the dilation, so
@@ -52,11 +63,8 @@ struct CameraModel {
     const T sigma_x = std::sqrt(fx_z * fx_z * (1 + u * u) * largest + dilation);
     const T sigma_y = std::sqrt(fy_z * fy_z * (1 + v * v) * largest + dilation);
     if (!(sigma_x <= kSigmaMax && sigma_y <= kSigmaMax)) return false;
-    const T extend =
-        std::min(T(io::kExtentSigmaMax), std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
-    const T bound_x = T(1.001) * extend * sigma_x + 1, bound_y = T(1.001) * extend * sigma_y + 1;
-    return m.x + bound_x <= 0 || m.x - bound_x >= T(width) || m.y + bound_y <= 0 ||
-           m.y - bound_y >= T(height);
+    const T extend = extent(opacity);
+    return misses_image(m, T(1.001) * extend * sigma_x + 1, T(1.001) * extend * sigma_y + 1);
   }
 };
 
@@ -82,7 +90,6 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
   const CameraModel<T> cam(frame.camera);
   const int degree = effective_degree(g.sh_degree, frame.settings);
   const int stride_k = sh_coeff_count(g.sh_degree);
-  const int width = frame.camera.width, height = frame.camera.height;
   frame.means2d.assign(n * 2, 0);
   frame.conics.assign(n * 3, 0);
   frame.depths.assign(n, 0);
@@ -142,15 +149,11 @@ void project_forward(ForwardResultT<T>& frame, ThreadPool& pool) {
         cull[i] = io::kCullFaint;
         continue;
       }
-      // Extent: where opacity * exp(-r^2/2) falls to kAlphaMin, at most kExtentSigmaMax sigma.
-      const T extend = std::min(T(io::kExtentSigmaMax),
-                                std::sqrt(2 * std::log(opacity / T(io::kAlphaMin))));
+      const T extend = CameraModel<T>::extent(opacity);
       const T radius_x = std::ceil(extend * std::sqrt(cov2d[0][0]));
       const T radius_y = std::ceil(extend * std::sqrt(cov2d[1][1]));
       const Vec2<T> mean2d = cam.projection.mean2d(p);
-      if ((radius_x <= 0 && radius_y <= 0) || mean2d.x + radius_x <= 0 ||
-          mean2d.x - radius_x >= T(width) || mean2d.y + radius_y <= 0 ||
-          mean2d.y - radius_y >= T(height)) {
+      if ((radius_x <= 0 && radius_y <= 0) || cam.misses_image(mean2d, radius_x, radius_y)) {
         cull[i] = io::kCullOffscreen;
         continue;
       }
