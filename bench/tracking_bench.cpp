@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "datasets/dataset.h"
 #include "io/slam_config_io.h"
 #include "slam/frame_tracker.h"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer target of every reader with clang under AddressSanitizer + UBSan into
-# build-fuzz/ and runs each for SECONDS (default 30), seeded from ../shared/data where present
-# and from inputs the project makes itself. Each input must be answered within 10 s and 1 GiB.
+# build-fuzz/ and runs each for SECONDS (default 30; one a core at a time), seeded from
+# ../shared/data where present and from inputs the project makes itself. Each input must be
+# answered within 10 s and 1 GiB.
 # Prints a table of executions per target; a crash or sanitizer report fails the script and
 # leaves the reproducer in build-fuzz/findings/.
 set -euo pipefail
@@ -77,20 +78,32 @@ fi
 mkdir -p "$build/findings"
 echo "| target | seconds | executions | executions/s | result |"
 echo "|---|---|---|---|---|"
-status=0
-for t in "${targets[@]}"; do
-  log="$build/fuzz_$t.log"
+# One fuzzer a core at a time (each is single-threaded): every target still gets SECONDS of a core.
+fuzz_target() {  # fuzz_target TARGET: runs it and writes its table row to $build/fuzz_TARGET.row
+  local t=$1 log="$build/fuzz_$1.log" result runs
   # The targets write each input to a file in TMPDIR: a folder of the build's, removed after.
-  scratch="$build/scratch_$t"
+  local scratch="$build/scratch_$t"
   mkdir -p "$scratch"
   if TMPDIR="$scratch" "$build/tests/fuzz/fuzz_$t" "$build/corpus/$t" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
        -rss_limit_mb=1024 -artifact_prefix="$build/findings/$t-" -print_final_stats=1 > "$log" 2>&1; then
     result=clean
   else
-    result="FAILED (see $log)"; status=1
+    result="FAILED (see $log)"
   fi
   rm -rf "$scratch"
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
-  echo "| $t | $seconds | $runs | $((runs / seconds)) | $result |"
+  echo "| $t | $seconds | $runs | $((runs / seconds)) | $result |" > "$build/fuzz_$t.row"
+}
+jobs_at_once=$(nproc)
+rm -f "$build"/fuzz_*.row
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs_at_once" ]; do wait -n; done
+  fuzz_target "$t" &
+done
+wait
+status=0
+for t in "${targets[@]}"; do
+  cat "$build/fuzz_$t.row"
+  grep -q '| clean |$' "$build/fuzz_$t.row" || status=1
 done
 exit $status

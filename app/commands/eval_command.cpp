@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.h"
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "commands/label_maps.h"
 #include "commands/run_input.h"
 #include "io/image_io.h"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "datasets/dataset.h"
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "slam/frame_tracker.h"
 #include "slam/slam_system.h"
 #include "io/trajectory.h"

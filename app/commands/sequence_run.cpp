@@ -11,7 +11,7 @@
 #include "batch/child_process.h"
 #include "batch/opencv_baseline.h"
 #include "batch/slurm.h"
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "commands/progress.h"
 #include "io/atomic_file.h"
 #include "io/json_file.h"

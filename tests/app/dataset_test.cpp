@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "app/run_gslam.h"
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "commands/run_input.h"
 #include "datasets/synthetic_sequence.h"
 #include "io/image_io.h"

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "datasets/dataset.h"
 #include "datasets/synthetic_sequence.h"
 #include "io/image_io.h"

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "datasets/dataset.h"
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 #include "slam/slam_system.h"
 #include "datasets/synthetic_sequence.h"
 #include "splat/error.h"

@@ -16,7 +16,8 @@ namespace {
 TEST(PlaceRecognition, VerifiedMatchGivesTheRelativePoseOfTwoViews) {
   gslam::test::TempDir dir;
   app::SyntheticOptions o;
-  o.frames = 30;
+  o.frames = 11;  // the frames used, of a 30-frame path
+  o.path_frames = 30;
   const app::Dataset d = gslam::test::synthetic_dataset(dir / "seq", o);
   tracking::PlaceDatabase db;
   for (std::size_t k : {0u, 10u}) db.add(k, tracking::extract_place_features(d.load(k)));

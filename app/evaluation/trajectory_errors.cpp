@@ -1,4 +1,4 @@
-#include "commands/evaluation.h"
+#include "evaluation/trajectory_errors.h"
 
 #include <cmath>
 
