@@ -108,6 +108,32 @@ double percentile(std::vector<double> v, double q) {
 }
 
 #ifdef GSLAM_HAVE_ROS1
+// Whether `rosnode info publisher` lists an established connection of `topic` to `subscriber`
+// (the publisher's own list: the master listing a subscriber says nothing of its TCP connection).
+bool connected(RosGraph& graph, const std::string& publisher, const std::string& topic, const std::string& subscriber) {
+  const std::string info = graph.run("rosnode info " + publisher).output;
+  const std::string block = " * topic: " + topic + "\n";
+  for (std::size_t at = info.find(block); at != std::string::npos; at = info.find(block, at + 1)) {
+    const std::size_t next = info.find(" * topic: ", at + block.size());
+    const std::string connection = info.substr(at, next == std::string::npos ? std::string::npos : next - at);
+    if (connection.find("* to: " + subscriber + "\n") != std::string::npos) return true;
+  }
+  return false;
+}
+
+// Waits until each of `topics` of `publisher` is connected to `subscriber` (false after kEventTimeout).
+bool wait_until_connected(RosGraph& graph, const std::string& publisher, const std::vector<std::string>& topics,
+                          const std::string& subscriber) {
+  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
+  for (const std::string& topic : topics) {
+    while (!connected(graph, publisher, topic, subscriber)) {
+      if (std::chrono::steady_clock::now() > deadline) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
+  return true;
+}
+
 // roscore on simulated time, rostopic echo on /tf, and the node with the teddy bag's topics and
 // `args`; returns once the node's /tf publication is connected to the echo. (The master listing
 // the echo as a subscriber is not enough: /tf is not latched, so a pose published before the
@@ -132,14 +158,9 @@ NodeRun start_node(const std::vector<std::string>& args, std::string& why_not) {
                                       "_backend:=cpu"};
   command.insert(command.end(), args.begin(), args.end());
   r.node = r.graph->spawn(command, "node.log");
-  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
-  while (r.graph->run("rosnode info /gslam").output.find("* to: /tf_echo") == std::string::npos) {
-    if (std::chrono::steady_clock::now() > deadline) {
-      why_not = "the node's /tf never connected to rostopic echo";
-      r.graph.reset();
-      return r;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  if (!wait_until_connected(*r.graph, "/gslam", {"/tf"}, "/tf_echo")) {
+    why_not = "the node's /tf never connected to rostopic echo";
+    r.graph.reset();
   }
   return r;
 }
@@ -154,16 +175,28 @@ NodeRun start_node_with_teddy_bag(const std::vector<std::string>& args, std::str
 }
 
 // rosbag play at the recording's rate, publishing the simulated clock; `topics` of the bag, its
-// output in `log`. It stays up past the bag's end (--keep-alive) until the test has seen what it
+// output in `log`. It starts paused and plays once each topic is connected to the node: a message
+// published before then is lost (--wait-for-subscribers waits for any one subscriber, and /tf has
+// the echo's too). It stays up past the bag's end (--keep-alive) until the test has seen what it
 // waits for and stops it: a player that exits at the end can take its last messages with it,
 // still queued for a subscriber that a loaded machine has not read them from yet.
 pid_t start_player(RosGraph& graph, const std::filesystem::path& bag, const std::vector<std::string>& topics,
                    const std::string& log) {
-  std::vector<std::string> args = {"rosbag", "play", "--clock", "--hz=1000", "--wait-for-subscribers", "--keep-alive", "-q", "--topics"};
+  std::vector<std::string> args = {"rosbag", "play", "--clock", "--hz=1000", "--pause", "--keep-alive", "-q", "--topics"};
   args.insert(args.end(), topics.begin(), topics.end());
-  args.push_back("--bags");
-  args.push_back(bag.string());
-  return graph.spawn(args, log);
+  args.insert(args.end(), {"--bags", bag.string(), "__name:=player"});
+  const pid_t player = graph.spawn(args, log);
+  EXPECT_TRUE(wait_until_connected(graph, "/player", topics, "/gslam")) << "rosbag play never connected to the node";
+  // The player takes the request only once paused ("Bag is already running." before then).
+  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
+  while (graph.run("rosservice call /player/pause_playback false").output.find("success: True") == std::string::npos) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      ADD_FAILURE() << "rosbag play never resumed: " << gslam::test::read_text(graph.dir() / log);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return player;
 }
 const std::vector<std::string> kImageTopics = {"/camera/rgb/image_color", "/camera/depth/image",
                                                "/camera/rgb/camera_info"};
