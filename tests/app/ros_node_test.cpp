@@ -110,20 +110,23 @@ double percentile(std::vector<double> v, double q) {
 #ifdef GSLAM_HAVE_ROS1
 // Whether `rosnode info publisher` lists an established connection of `topic` to `subscriber`
 // (the publisher's own list: the master listing a subscriber says nothing of its TCP connection).
-bool connected(RosGraph& graph, const std::string& publisher, const std::string& topic, const std::string& subscriber) {
+bool connected(RosGraph& graph, const std::string& publisher, const std::string& topic,
+               const std::string& subscriber) {
   const std::string info = graph.run("rosnode info " + publisher).output;
   const std::string block = " * topic: " + topic + "\n";
   for (std::size_t at = info.find(block); at != std::string::npos; at = info.find(block, at + 1)) {
     const std::size_t next = info.find(" * topic: ", at + block.size());
-    const std::string connection = info.substr(at, next == std::string::npos ? std::string::npos : next - at);
+    const std::string connection =
+        info.substr(at, next == std::string::npos ? std::string::npos : next - at);
     if (connection.find("* to: " + subscriber + "\n") != std::string::npos) return true;
   }
   return false;
 }
 
-// Waits until each of `topics` of `publisher` is connected to `subscriber` (false after kEventTimeout).
-bool wait_until_connected(RosGraph& graph, const std::string& publisher, const std::vector<std::string>& topics,
-                          const std::string& subscriber) {
+// Waits until each of `topics` of `publisher` is connected to `subscriber` (false after
+// kEventTimeout).
+bool wait_until_connected(RosGraph& graph, const std::string& publisher,
+                          const std::vector<std::string>& topics, const std::string& subscriber) {
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
   for (const std::string& topic : topics) {
     while (!connected(graph, publisher, topic, subscriber)) {
@@ -182,14 +185,17 @@ NodeRun start_node_with_teddy_bag(const std::vector<std::string>& args, std::str
 // still queued for a subscriber that a loaded machine has not read them from yet.
 pid_t start_player(RosGraph& graph, const std::filesystem::path& bag, const std::vector<std::string>& topics,
                    const std::string& log) {
-  std::vector<std::string> args = {"rosbag", "play", "--clock", "--hz=1000", "--pause", "--keep-alive", "-q", "--topics"};
+  std::vector<std::string> args = {"rosbag",  "play",         "--clock", "--hz=1000",
+                                   "--pause", "--keep-alive", "-q",      "--topics"};
   args.insert(args.end(), topics.begin(), topics.end());
   args.insert(args.end(), {"--bags", bag.string(), "__name:=player"});
   const pid_t player = graph.spawn(args, log);
-  EXPECT_TRUE(wait_until_connected(graph, "/player", topics, "/gslam")) << "rosbag play never connected to the node";
+  EXPECT_TRUE(wait_until_connected(graph, "/player", topics, "/gslam"))
+      << "rosbag play never connected to the node";
   // The player takes the request only once paused ("Bag is already running." before then).
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
-  while (graph.run("rosservice call /player/pause_playback false").output.find("success: True") == std::string::npos) {
+  while (graph.run("rosservice call /player/pause_playback false").output.find("success: True") ==
+         std::string::npos) {
     if (std::chrono::steady_clock::now() > deadline) {
       ADD_FAILURE() << "rosbag play never resumed: " << gslam::test::read_text(graph.dir() / log);
       break;
