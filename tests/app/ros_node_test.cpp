@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -16,9 +17,9 @@
 #include "app/run_gslam.h"
 #include "datasets/dataset.h"
 #include "io/trajectory.h"
+#include "support/require_tool.h"
 #include "support/ros_graph.h"
 #include "support/teddy_recording.h"
-#include "support/require_tool.h"
 #include "support/temp_dir.h"
 #include "support/test_data.h"
 
@@ -93,12 +94,21 @@ std::vector<PublishedPose> published_poses(const std::filesystem::path& csv) {
   return out;
 }
 
-// Waits until the node has published `count` poses (the event the test needs, not a clock).
-std::vector<PublishedPose> wait_for_poses(const std::filesystem::path& csv, std::size_t count) {
+// Polls `done` every 100 ms until it holds (true) or kEventTimeout has passed (false): the tests
+// wait for the event they need, not a clock.
+bool wait_until(const std::function<bool()>& done) {
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
-  std::vector<PublishedPose> poses;
-  while ((poses = published_poses(csv)).size() < count && std::chrono::steady_clock::now() < deadline)
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return true;
+}
+
+// Waits until the node has published `count` poses.
+std::vector<PublishedPose> wait_for_poses(const std::filesystem::path& csv, std::size_t count) {
+  std::vector<PublishedPose> poses;
+  wait_until([&] { return (poses = published_poses(csv)).size() >= count; });
   return poses;
 }
 
@@ -108,11 +118,10 @@ double percentile(std::vector<double> v, double q) {
 }
 
 #ifdef GSLAM_HAVE_ROS1
-// Whether `rosnode info publisher` lists an established connection of `topic` to `subscriber`
-// (the publisher's own list: the master listing a subscriber says nothing of its TCP connection).
-bool connected(RosGraph& graph, const std::string& publisher, const std::string& topic,
-               const std::string& subscriber) {
-  const std::string info = graph.run("rosnode info " + publisher).output;
+// Whether `info`, what `rosnode info` says of a publisher, lists an established connection of
+// `topic` to `subscriber` (the publisher's own list: the master listing a subscriber says nothing
+// of its TCP connection).
+bool connected(const std::string& info, const std::string& topic, const std::string& subscriber) {
   const std::string block = " * topic: " + topic + "\n";
   for (std::size_t at = info.find(block); at != std::string::npos; at = info.find(block, at + 1)) {
     const std::size_t next = info.find(" * topic: ", at + block.size());
@@ -123,18 +132,15 @@ bool connected(RosGraph& graph, const std::string& publisher, const std::string&
   return false;
 }
 
-// Waits until each of `topics` of `publisher` is connected to `subscriber` (false after
-// kEventTimeout).
+// Waits until each of `topics` of `publisher` is connected to `subscriber`.
 bool wait_until_connected(RosGraph& graph, const std::string& publisher,
                           const std::vector<std::string>& topics, const std::string& subscriber) {
-  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
-  for (const std::string& topic : topics) {
-    while (!connected(graph, publisher, topic, subscriber)) {
-      if (std::chrono::steady_clock::now() > deadline) return false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-  }
-  return true;
+  return wait_until([&] {
+    const std::string info = graph.run("rosnode info " + publisher).output;
+    return std::all_of(topics.begin(), topics.end(), [&](const std::string& topic) {
+      return connected(info, topic, subscriber);
+    });
+  });
 }
 
 // roscore on simulated time, rostopic echo on /tf, and the node with the teddy bag's topics and
@@ -193,15 +199,11 @@ pid_t start_player(RosGraph& graph, const std::filesystem::path& bag, const std:
   EXPECT_TRUE(wait_until_connected(graph, "/player", topics, "/gslam"))
       << "rosbag play never connected to the node";
   // The player takes the request only once paused ("Bag is already running." before then).
-  const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
-  while (graph.run("rosservice call /player/pause_playback false").output.find("success: True") ==
-         std::string::npos) {
-    if (std::chrono::steady_clock::now() > deadline) {
-      ADD_FAILURE() << "rosbag play never resumed: " << gslam::test::read_text(graph.dir() / log);
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  EXPECT_TRUE(wait_until([&] {
+    return graph.run("rosservice call /player/pause_playback false").output.find("success: True") !=
+           std::string::npos;
+  })) << "rosbag play never resumed: "
+      << gslam::test::read_text(graph.dir() / log);
   return player;
 }
 const std::vector<std::string> kImageTopics = {"/camera/rgb/image_color", "/camera/depth/image",
