@@ -1,6 +1,8 @@
 #pragma once
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <functional>
 #include <mutex>
@@ -25,19 +27,23 @@ class ThreadPool {
 
  private:
   void worker_loop();
-  void run_items();
+  // Runs items of the job until none is left to claim.
+  void run_items(const std::function<void(std::size_t)>& fn, std::size_t size);
+  // Polls `ready` for a few milliseconds before the caller blocks: a mapping step hands the
+  // pool dozens of short jobs, and sleeping and waking between them costs more than the gaps.
+  static bool spin_until(const std::function<bool()>& ready);
 
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable wake_, done_;
+  // The job: set under the mutex while no worker is busy; items are claimed through next_.
   const std::function<void(std::size_t)>* job_ = nullptr;
   std::size_t job_size_ = 0;
-  std::size_t next_ = 0;
-  std::size_t finished_ = 0;
-  std::size_t generation_ = 0;
-  int busy_ = 0;
-  bool stop_ = false;
-  std::exception_ptr error_;
+  std::atomic<std::size_t> next_{0}, finished_{0};
+  std::atomic<uint64_t> generation_{0};
+  std::atomic<int> busy_{0};  // workers that took the current job and have not left it
+  std::atomic<bool> stop_{false};
+  std::exception_ptr error_;  // under the mutex
 };
 
 // fn(i) for every i in [0, n): on the pool where there is one, else in order on this thread.
