@@ -14,7 +14,8 @@ namespace splat {
 
 namespace {
 // How long a thread polls before it sleeps: the gaps between a mapping step's jobs are mostly
-// shorter, and on teddy 5 ms made the run 7-10% faster than sleeping at once (docs/tuning.md).
+// shorter: on teddy 5 ms made mapping 7% and the whole run 3% faster than sleeping at once
+// (docs/tuning.md).
 constexpr std::chrono::microseconds kSpin(5000);
 
 void cpu_relax() {
