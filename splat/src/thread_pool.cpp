@@ -54,16 +54,16 @@ ThreadPool::~ThreadPool() {
   for (auto& worker : workers_) worker.join();
 }
 
-bool ThreadPool::spin_until(const std::function<bool()>& ready) {
+void ThreadPool::spin_until(const std::function<bool()>& ready) {
   const auto until = std::chrono::steady_clock::now() + kSpin;
   for (;;) {
     for (int i = 0; i < 64; ++i) {
-      if (ready()) return true;
+      if (ready()) return;
       cpu_relax();
     }
     // A loaded machine's other threads run first: the poll only takes a core nobody wants.
     std::this_thread::yield();
-    if (std::chrono::steady_clock::now() > until) return false;
+    if (std::chrono::steady_clock::now() > until) return;
   }
 }
 
@@ -83,13 +83,14 @@ void ThreadPool::run_items(const std::function<void(std::size_t)>& fn, std::size
 
 void ThreadPool::worker_loop() {
   uint64_t seen = 0;
+  const auto woken = [&] { return stop_ || generation_ != seen; };
   for (;;) {
-    spin_until([&] { return stop_ || generation_ != seen; });
+    spin_until(woken);
     const std::function<void(std::size_t)>* fn;
     std::size_t size;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      wake_.wait(lock, woken);
       if (stop_) return;
       // Taken under the mutex: parallel_for changes the job only while no worker is busy, so
       // a worker that comes late finds the finished job emptied (size 0).

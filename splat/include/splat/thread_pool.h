@@ -29,9 +29,10 @@ class ThreadPool {
   void worker_loop();
   // Runs items of the job until none is left to claim.
   void run_items(const std::function<void(std::size_t)>& fn, std::size_t size);
-  // Polls `ready` for a few milliseconds before the caller blocks: a mapping step hands the
-  // pool dozens of short jobs, and sleeping and waking between them costs more than the gaps.
-  static bool spin_until(const std::function<bool()>& ready);
+  // Polls `ready` until it holds, for up to a few milliseconds, before the caller blocks: a
+  // mapping step hands the pool dozens of short jobs, and sleeping and waking between them
+  // costs more than the gaps.
+  static void spin_until(const std::function<bool()>& ready);
 
   std::vector<std::thread> workers_;
   std::mutex mutex_;
