@@ -27,7 +27,7 @@ gslam_require_package(TinyGLTF libtinygltf-dev)
 gslam_require_package(nlohmann_json nlohmann-json3-dev)
 # Image pyramids and gradients for the RGB-D odometry; rgbd (libopencv-contrib-dev): the
 # benchmark's baseline, OpenCV's own RGB-D odometry.
-gslam_require_package(OpenCV "libopencv-dev libopencv-contrib-dev" COMPONENTS core imgproc videoio features2d calib3d rgbd)
+gslam_require_package(OpenCV "libopencv-dev libopencv-contrib-dev" COMPONENTS core imgproc features2d calib3d rgbd)
 # The keyframe pose graph (loop closure).
 gslam_require_package(Ceres libceres-dev)
 if(GSLAM_BUILD_TESTS)

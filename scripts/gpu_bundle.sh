@@ -5,12 +5,10 @@
 # bundle stays under 64 MiB. Run scripts/gpu_check.sh there.
 # Usage: scripts/gpu_bundle.sh [N|bench|app N]
 # `bench` packs only the rasterizer's tests and benchmarks and the donut map (7 MiB): the full
-# bundle's libraries (OpenCV, FFmpeg, ROS) now pass the device tool's 64 MiB.
+# bundle's libraries (OpenCV, Ceres, ROS) now pass the device tool's 64 MiB.
 # `app N` packs gslam for reconstruct and live on teddy's first N frames, with rasterizer_bench,
 # splat_tests and the donut map for the mapping iteration's bench and the Vulkan tests: their
-# libraries xz-compressed into app.tar.xz, less OpenCV's video and image codecs, whose closures (FFmpeg,
-# GDAL, ...) are most of the 350 MiB. Stubs stand in for them (render's video export and ROS's
-# compressed images call them; reconstruct and live do not: a call aborts naming the stub).
+# libraries xz-compressed into app.tar.xz.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 frames=${1:-64}
@@ -25,27 +23,11 @@ if [ "$frames" = bench ]; then
   cp build/bench/{rasterizer_bench,mapping_host_bench} build/tests/splat_tests "$bundle/bin/"
 elif $app_mode; then
   cp build/app/gslam build/bench/rasterizer_bench build/tests/splat_tests "$bundle/bin/"
-  # The stubs: every symbol gslam takes from the two libraries, each aborting with its name.
-  stubs=$(mktemp -d)
-  for lib in libopencv_videoio.so.406 libopencv_imgcodecs.so.406; do
-    nm -D --defined-only "/lib/x86_64-linux-gnu/$lib" | awk '{print $3}' | sort > "$stubs/defined"
-    nm -D --undefined-only build/app/gslam | awk '{print $2}' | sed 's/@.*//' | sort > "$stubs/used"
-    { echo '#include <stdio.h>'; echo '#include <stdlib.h>'
-      comm -12 "$stubs/defined" "$stubs/used" | while read -r sym; do
-        echo "void $sym(void) { fprintf(stderr, \"gslam bundle: %s is a stub\\n\", \"$sym\"); abort(); }"
-      done; } > "$stubs/$lib.c"
-    gcc -shared -fPIC -Wl,-soname,"$lib" -o "$bundle/lib/$lib" "$stubs/$lib.c"
-  done
-  rm -rf "$stubs"
 else
   cp build/app/gslam build/bench/{rasterizer_bench,mapping_host_bench} build/tests/{splat_tests,app_tests,system_tests} "$bundle/bin/"
 fi
 # Libraries the target lacks or has in other versions; glibc and libstdc++ come from the target.
-# In app mode: only what gslam needs without the two stubbed libraries (LD_LIBRARY_PATH=lib).
-closure() {
-  if $app_mode; then LD_LIBRARY_PATH=$bundle/lib ldd "$1"; else ldd "$1"; fi
-}
-for b in "$bundle"/bin/*; do closure "$b" | awk '{print $3}' | grep '^/' | grep -v "^$PWD/$bundle" || true; done | sort -u |
+for b in "$bundle"/bin/*; do ldd "$b" | awk '{print $3}' | grep '^/' | grep -v "^$PWD/$bundle" || true; done | sort -u |
   grep -v -E 'libc\.so|libm\.so|libstdc\+\+|libgcc_s|libpthread|libdl\.so|librt\.so|ld-linux|libvulkan|libGLdispatch|libOpenGL' |
   xargs -I{} cp -L {} "$bundle/lib/"
 if [ "$frames" = bench ]; then

@@ -4,11 +4,11 @@
 #include <cstdio>
 #include <map>
 
-#include "batch/child_process.h"
 #include "commands/interrupt.h"
 #include "commands/run_plan.h"
 #include "commands/sequence_run.h"
 #include "commands/slurm_submit.h"
+#include "process/child_process.h"
 #include "splat/error.h"
 
 namespace app {

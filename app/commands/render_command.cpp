@@ -234,6 +234,7 @@ void highlight_classes(LoadedMap& map, const std::vector<uint16_t>& wanted) {
 int run_render(const RenderOptions& o) {
   const Formats formats = parse_formats(o.formats);
   refuse_earlier_render(o.out, o.overwrite);
+  if (formats.mp4) Mp4Writer::require_encoder(o.out / "render.mp4");
   splat::RenderSettings settings;
   const Eigen::Vector3d bg = parse_vector3(o.background, "background");
   for (int c = 0; c < 3; ++c) settings.background[static_cast<std::size_t>(c)] = static_cast<float>(bg[c]);

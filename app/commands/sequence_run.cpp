@@ -3,18 +3,17 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "batch/batch_table.h"
 #include "batch/benchmark_table.h"
-#include "batch/child_process.h"
 #include "batch/opencv_baseline.h"
 #include "batch/slurm.h"
-#include "evaluation/trajectory_errors.h"
 #include "commands/progress.h"
+#include "evaluation/trajectory_errors.h"
 #include "io/atomic_file.h"
 #include "io/json_file.h"
+#include "process/child_process.h"
 #include "splat/error.h"
 
 namespace app {

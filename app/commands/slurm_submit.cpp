@@ -5,12 +5,12 @@
 #include <fstream>
 #include <thread>
 
-#include "batch/child_process.h"
 #include "batch/slurm.h"
 #include "commands/interrupt.h"
 #include "commands/sequence_run.h"
 #include "io/atomic_file.h"
 #include "io/json_file.h"
+#include "process/child_process.h"
 #include "splat/error.h"
 
 namespace app {

@@ -2,8 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "io/image_io.h"
 #include "splat/error.h"
@@ -66,29 +64,8 @@ double default_depth_scale(const RosImage& h) { return h.encoding == "32FC1" ? 1
 splat::Image8 decode_colour(const RosImage& image, const std::string& where) {
   if (image.compressed) {
     if (image.data.size() > (std::size_t(1) << 30)) fail_at(where, "compressed image over 1 GiB");
-    const cv::Mat bytes(1, static_cast<int>(image.data.size()), CV_8UC1,
-                        const_cast<std::uint8_t*>(image.data.data()));
-    cv::Mat decoded;
-    try {
-      decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);  // BGR, 8-bit
-    } catch (const cv::Exception& e) {
-      fail_at(where, "compressed image (" + image.encoding + ") does not decode: " + e.what());
-    }
-    if (decoded.empty() || decoded.type() != CV_8UC3) {
-      fail_at(where, "compressed image (format '" + image.encoding +
-                         "') does not decode as PNG or JPEG colour");
-    }
-    if (!image_size_allowed(std::uint64_t(decoded.cols), std::uint64_t(decoded.rows))) {
-      fail_at(where, "image over " + std::string(kImageSizeLimit));
-    }
-    splat::Image8 out(decoded.cols, decoded.rows, 3);
-    for (int y = 0; y < decoded.rows; ++y) {
-      const std::uint8_t* row = decoded.ptr<std::uint8_t>(y);
-      for (int x = 0; x < decoded.cols; ++x) {
-        for (int c = 0; c < 3; ++c) out.at(x, y, c) = row[x * 3 + (2 - c)];
-      }
-    }
-    return out;
+    // PNG or JPEG, any of their layouts, as 8-bit RGB (the readers check the size first).
+    return decode_rgb8(image.data, where + ": compressed image (format '" + image.encoding + "')");
   }
   if (!is_colour_encoding(image)) {
     fail_at(where, "colour encoding '" + image.encoding + "' is not one gslam reads (" +

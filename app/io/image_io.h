@@ -39,6 +39,11 @@ void write_jpeg_rgb8(const std::filesystem::path& path, const splat::Image8& ima
 
 // PNG or JPEG by extension.
 splat::Image8 read_rgb8(const std::filesystem::path& path);
+// The same from an encoded image in memory (PNG or JPEG by its first bytes); `where` names it in
+// errors. Each also on its own.
+splat::Image8 decode_rgb8(std::span<const std::uint8_t> bytes, const std::string& where);
+splat::Image8 decode_png_rgb8(std::span<const std::uint8_t> bytes, const std::string& where);
+splat::Image8 decode_jpeg_rgb8(std::span<const std::uint8_t> bytes, const std::string& where);
 
 // Reads a single-channel 16-bit PNG (depth maps) exactly as stored.
 splat::Image16 read_png_gray16(const std::filesystem::path& path);

@@ -1,21 +1,18 @@
+#include <jpeglib.h>
+
 #include <algorithm>
 #include <cctype>
 #include <csetjmp>
 #include <cstdio>
 #include <memory>
 
-#include <jpeglib.h>
-
 #include "io/atomic_file.h"
 #include "io/image_io.h"
+#include "io/image_source.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
 
 // libjpeg reports errors through this handler; it longjmps back with the message kept.
 struct JpegError {
@@ -29,11 +26,8 @@ void on_error(j_common_ptr info) {
   std::longjmp(err->jump, 1);
 }
 
-}  // namespace
-
-splat::Image8 read_jpeg_rgb8(const std::filesystem::path& path) {
-  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
-  if (!file) throw splat::Error(path.string() + ": cannot open file");
+// Reads a JPEG from `file` (named `path` in errors) as 8-bit RGB.
+splat::Image8 read_jpeg(ImageSource file, const std::filesystem::path& path) {
   jpeg_decompress_struct info;
   JpegError err;
   info.err = jpeg_std_error(&err.mgr);
@@ -63,10 +57,20 @@ splat::Image8 read_jpeg_rgb8(const std::filesystem::path& path) {
   return image;
 }
 
+}  // namespace
+
+splat::Image8 read_jpeg_rgb8(const std::filesystem::path& path) {
+  return read_jpeg(open_image_file(path), path);
+}
+
+splat::Image8 decode_jpeg_rgb8(std::span<const std::uint8_t> bytes, const std::string& where) {
+  return read_jpeg(open_image_bytes(bytes, where), where);
+}
+
 void write_jpeg_rgb8(const std::filesystem::path& path, const splat::Image8& image, int quality) {
   if (image.channels != 3 || image.width < 1 || image.height < 1) throw splat::Error(path.string() + ": expected a non-empty RGB image");
   write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::unique_ptr<std::FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
+    ImageSource file(std::fopen(tmp.c_str(), "wb"));
     if (!file) throw splat::Error(tmp.string() + ": cannot open for writing");
     jpeg_compress_struct info;
     JpegError err;
@@ -99,6 +103,15 @@ splat::Image8 read_rgb8(const std::filesystem::path& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".jpg" || ext == ".jpeg") return read_jpeg_rgb8(path);
   return read_png_rgb8(path);
+}
+
+splat::Image8 decode_rgb8(std::span<const std::uint8_t> bytes, const std::string& where) {
+  static constexpr std::uint8_t kPng[4] = {0x89, 'P', 'N', 'G'}, kJpeg[3] = {0xFF, 0xD8, 0xFF};
+  if (bytes.size() >= 4 && std::equal(kPng, kPng + 4, bytes.begin()))
+    return decode_png_rgb8(bytes, where);
+  if (bytes.size() >= 3 && std::equal(kJpeg, kJpeg + 3, bytes.begin()))
+    return decode_jpeg_rgb8(bytes, where);
+  throw splat::Error(where + ": image is neither PNG nor JPEG");
 }
 
 }  // namespace app

@@ -7,17 +7,15 @@
 #include <memory>
 
 #include "io/atomic_file.h"
-#include "io/image_io.h"
 #include "io/file_error.h"
+#include "io/image_io.h"
+#include "io/image_source.h"
 #include "splat/error.h"
 
 namespace app {
 namespace {
 
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<std::FILE, FileCloser>;
+using File = ImageSource;
 
 // libpng reports errors by longjmp; this keeps the message for the exception.
 struct PngErrors {
@@ -58,13 +56,12 @@ void write_png(const std::filesystem::path& path, int width, int height, int bit
   });
 }
 
-// Reads a PNG after `configure` sets its transforms; configure returns an error message, or
-// an empty string to go on. No C++ object is created between setjmp and the reads.
+// Reads a PNG from `file` (named `path` in errors) after `configure` sets its transforms;
+// configure returns an error message, or an empty string to go on. No C++ object is created
+// between setjmp and the reads.
 template <typename T>
-splat::ImageT<T> read_png(const std::filesystem::path& path, int channels,
+splat::ImageT<T> read_png(File file, const std::filesystem::path& path, int channels,
                           std::string (*configure)(png_structp, png_infop)) {
-  File file(std::fopen(path.c_str(), "rb"));
-  if (!file) fail(path, "cannot open file");
   unsigned char signature[8];
   if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
     fail(path, "not a PNG file");
@@ -111,6 +108,19 @@ splat::ImageT<T> read_png(const std::filesystem::path& path, int channels,
   return image;
 }
 
+// Any 8-bit PNG's transforms to RGB.
+std::string to_rgb8(png_structp png, png_infop info) {
+  const int type = png_get_color_type(png, info);
+  if (png_get_bit_depth(png, info) == 16) png_set_strip_16(png);
+  if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+  if (type == PNG_COLOR_TYPE_GRAY || type == PNG_COLOR_TYPE_GRAY_ALPHA) {
+    if (png_get_bit_depth(png, info) < 8) png_set_expand_gray_1_2_4_to_8(png);
+    png_set_gray_to_rgb(png);
+  }
+  if (type & PNG_COLOR_MASK_ALPHA) png_set_strip_alpha(png);
+  return std::string();
+}
+
 }  // namespace
 
 void write_png_rgb(const std::filesystem::path& path, int width, int height, std::span<const float> rgb) {
@@ -142,21 +152,15 @@ void write_png_gray8(const std::filesystem::path& path, const splat::Image8& ima
 }
 
 splat::Image8 read_png_rgb8(const std::filesystem::path& path) {
-  return read_png<uint8_t>(path, 3, [](png_structp png, png_infop info) {
-    const int type = png_get_color_type(png, info);
-    if (png_get_bit_depth(png, info) == 16) png_set_strip_16(png);
-    if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
-    if (type == PNG_COLOR_TYPE_GRAY || type == PNG_COLOR_TYPE_GRAY_ALPHA) {
-      if (png_get_bit_depth(png, info) < 8) png_set_expand_gray_1_2_4_to_8(png);
-      png_set_gray_to_rgb(png);
-    }
-    if (type & PNG_COLOR_MASK_ALPHA) png_set_strip_alpha(png);
-    return std::string();
-  });
+  return read_png<uint8_t>(open_image_file(path), path, 3, to_rgb8);
+}
+
+splat::Image8 decode_png_rgb8(std::span<const std::uint8_t> bytes, const std::string& where) {
+  return read_png<uint8_t>(open_image_bytes(bytes, where), where, 3, to_rgb8);
 }
 
 splat::Image16 read_png_gray16(const std::filesystem::path& path) {
-  return read_png<uint16_t>(path, 1, [](png_structp png, png_infop info) {
+  return read_png<uint16_t>(open_image_file(path), path, 1, [](png_structp png, png_infop info) {
     if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY || png_get_bit_depth(png, info) != 16) {
       return "expected a 16-bit greyscale PNG (depth map), got colour type " +
              std::to_string(png_get_color_type(png, info)) + " with " +
@@ -179,14 +183,16 @@ splat::Image16 read_png_labels(const std::filesystem::path& path) {
     }
   }
   if (header[24] == 16) return read_png_gray16(path);
-  const splat::Image8 narrow = read_png<uint8_t>(path, 1, [](png_structp png, png_infop info) {
-    if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY || png_get_bit_depth(png, info) != 8) {
-      return "expected an 8 or 16-bit greyscale PNG of class ids, got colour type " +
-             std::to_string(png_get_color_type(png, info)) + " with " + std::to_string(png_get_bit_depth(png, info)) +
-             " bits";
-    }
-    return std::string();
-  });
+  const splat::Image8 narrow =
+      read_png<uint8_t>(open_image_file(path), path, 1, [](png_structp png, png_infop info) {
+        if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY ||
+            png_get_bit_depth(png, info) != 8) {
+          return "expected an 8 or 16-bit greyscale PNG of class ids, got colour type " +
+                 std::to_string(png_get_color_type(png, info)) + " with " +
+                 std::to_string(png_get_bit_depth(png, info)) + " bits";
+        }
+        return std::string();
+      });
   splat::Image16 wide(narrow.width, narrow.height, 1);
   std::copy(narrow.data.begin(), narrow.data.end(), wide.data.begin());
   return wide;

@@ -1,4 +1,4 @@
-// H.264 video in an .mp4 (OpenCV's VideoWriter on Debian's FFmpeg libraries).
+// H.264 video in an .mp4, encoded by Debian's ffmpeg program with libx264.
 #pragma once
 #include <filesystem>
 #include <memory>
@@ -11,6 +11,9 @@ class Mp4Writer {
   // Throws splat::Error naming the file when the size is odd (H.264's 4:2:0 needs even sides)
   // or no H.264 encoder opens.
   Mp4Writer(const std::filesystem::path& path, int width, int height, double fps);
+  // Throws splat::Error naming `path` if the encoder (the ffmpeg program) is not installed: for
+  // a command to check before it renders anything.
+  static void require_encoder(const std::filesystem::path& path);
   ~Mp4Writer();
   Mp4Writer(const Mp4Writer&) = delete;
   Mp4Writer& operator=(const Mp4Writer&) = delete;

@@ -163,7 +163,7 @@ TEST(Cli, SuggestsTheNearestCommandAndOption) {
 }
 
 // A video of an orbit of the bundled demo map (a donut): H.264 with one frame per view, as
-// ffprobe (FFmpeg's own reader) decodes it; and a run folder renders along its cameras.
+// ffprobe (FFmpeg's own reader) decodes it; an odd size or no ffmpeg program is an error.
 TEST(CliRender, Mp4OfTheDonutOrbitDecodesWithEveryView) {
   if (!gslam::test::program_available("ffprobe")) GTEST_SKIP() << "ffprobe not found (apt-get install ffmpeg)";
   TempDir dir;
@@ -180,6 +180,15 @@ TEST(CliRender, Mp4OfTheDonutOrbitDecodesWithEveryView) {
                                   " --orbit 2 --size 161x120 --format mp4");
   EXPECT_NE(odd.exit_code, 0);
   EXPECT_NE(odd.output.find("even width and height"), std::string::npos) << odd.output;
+  // Without the ffmpeg program: one line naming the file and what to install, and no video.
+  const RunResult bare = gslam::test::run_command(
+      "PATH=/nonexistent " + std::string(GSLAM_BINARY) + " render " + GSLAM_SOURCE_DIR +
+      "/assets/demo_map.ply --out " + (dir / "bare").string() +
+      " --orbit 2 --size 160x120 --format mp4 --backend cpu");
+  EXPECT_NE(bare.exit_code, 0);
+  EXPECT_NE(bare.output.find("render.mp4"), std::string::npos) << bare.output;
+  EXPECT_NE(bare.output.find("needs the ffmpeg program"), std::string::npos) << bare.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bare" / "render.mp4"));
 }
 
 TEST(CliRender, RunFolderRendersAlongItsCameras) {

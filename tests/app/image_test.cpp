@@ -1,14 +1,16 @@
+#include <Imath/half.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
 
-#include <algorithm>
-
-#include <Imath/half.h>
-#include <gtest/gtest.h>
-
+#include "datasets/ros_image_decode.h"
 #include "io/image_io.h"
+#include "io/video_io.h"
 #include "support/expect_error.h"
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -104,6 +106,54 @@ TEST(ImageFormats, JpegHeaderClaimingGigapixelsIsRefusedBeforeAllocating) {
   gslam::test::write_text(dir / "huge.JPEG", jpeg);
   GSLAM_EXPECT_ERROR(app::read_rgb8(dir / "huge.JPEG"), "huge.JPEG", "60000x60000", "at most 16384 a side");
   EXPECT_EQ(app::read_rgb8(dir / "small.jpg").width, 8);
+}
+
+// An encoded image in memory (a ROS CompressedImage) decodes to the pixels its file reads as,
+// PNG or JPEG told apart by their first bytes; other or broken bytes are an error naming them.
+TEST(ImageFormats, EncodedBytesInMemoryDecodeAsTheirFiles) {
+  TempDir dir;
+  splat::Image8 image(5, 3, 3);
+  for (std::size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>(17 * i);
+  app::write_png_rgb8(dir / "a.png", image);
+  app::write_jpeg_rgb8(dir / "a.jpg", image, 90);
+  auto bytes_of = [&](const std::string& name) {
+    const std::string text = gslam::test::read_text(dir / name);
+    return std::vector<uint8_t>(text.begin(), text.end());
+  };
+  const std::vector<uint8_t> png = bytes_of("a.png"), jpeg = bytes_of("a.jpg");
+  EXPECT_EQ(app::decode_rgb8(png, "png bytes").data, image.data);
+  EXPECT_EQ(app::decode_rgb8(jpeg, "jpeg bytes").data, app::read_jpeg_rgb8(dir / "a.jpg").data);
+  app::RosImage message;
+  message.compressed = true;
+  message.encoding = "rgb8; png compressed bgr8";
+  message.data = png;
+  EXPECT_EQ(app::decode_colour(message, "bag.mcap: /camera/rgb message 3").data, image.data);
+  message.data.resize(png.size() / 2);
+  GSLAM_EXPECT_ERROR(app::decode_colour(message, "bag.mcap: /camera/rgb message 3"),
+                     "bag.mcap: /camera/rgb message 3", "png compressed");
+  GSLAM_EXPECT_ERROR(
+      app::decode_rgb8(std::vector<uint8_t>{'G', 'I', 'F', '8', '9', 'a'}, "gif bytes"),
+      "gif bytes", "neither PNG nor JPEG");
+  GSLAM_EXPECT_ERROR(app::decode_rgb8(std::vector<uint8_t>{}, "no bytes"), "no bytes");
+  GSLAM_EXPECT_ERROR(app::decode_jpeg_rgb8(std::span(jpeg).first(jpeg.size() / 3), "cut jpeg"),
+                     "cut jpeg");
+}
+
+// ffmpeg failing (here: no folder to write into) is an error naming the file and ffmpeg's
+// reason, whether it shows while frames are sent or at the end; the writer leaves no process.
+TEST(VideoFormats, EncoderFailureIsAnErrorNamingTheFile) {
+  if (!gslam::test::program_available("ffmpeg"))
+    GTEST_SKIP() << "ffmpeg not found (apt-get install ffmpeg)";
+  TempDir dir;
+  const std::filesystem::path path = dir / "missing" / "video.mp4";
+  GSLAM_EXPECT_ERROR(
+      {
+        app::Mp4Writer video(path, 64, 48, 30);
+        for (int k = 0; k < 50; ++k) video.add(std::vector<float>(64 * 48 * 3, 0.5f));
+        video.finish();
+      },
+      path.c_str(), "ffmpeg failed");
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 }  // namespace

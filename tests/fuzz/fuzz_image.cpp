@@ -9,5 +9,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   try { app::read_png_rgb8(png); } catch (const splat::Error&) {}
   try { app::read_png_gray16(png); } catch (const splat::Error&) {}
   try { app::read_jpeg_rgb8(jpg); } catch (const splat::Error&) {}
+  try {
+    app::decode_rgb8({data, size}, "frame");
+  } catch (const splat::Error&) {
+  }  // a ROS CompressedImage
   return 0;
 }

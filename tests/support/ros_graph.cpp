@@ -11,7 +11,7 @@
 #include <chrono>
 #include <thread>
 
-#include "batch/child_process.h"
+#include "process/child_process.h"
 #include "splat/error.h"
 
 namespace gslam::test {

@@ -10,7 +10,7 @@
 #include <random>
 #include <thread>
 
-#include "batch/child_process.h"
+#include "process/child_process.h"
 #include "splat/error.h"
 
 namespace gslam::test {

@@ -1,10 +1,13 @@
 // Running programs as child processes: with their output in a log file (gslam benchmark runs
 // each sequence's reconstruct and eval so, each with its own memory and failure), several at
-// once (--jobs), or with their output captured (sbatch, squeue).
+// once (--jobs), with their output captured (sbatch, squeue), or fed through their standard
+// input (ffmpeg encoding a video).
 #pragma once
 #include <sys/types.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -19,6 +22,18 @@ std::filesystem::path this_executable();
 // splat::Error if it cannot be started.
 pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
                    const std::vector<std::string>& environment = {});
+
+// A child whose standard input this process writes through `input`: a socket rather than a
+// pipe, so that writing to a child that has ended is an error (send's EPIPE), never a SIGPIPE
+// that would end this process.
+struct PipedChild {
+  pid_t pid = 0;
+  int input = -1;
+};
+// Starts `args` as start_logged does, with standard input read from the returned socket.
+PipedChild start_piped(const std::vector<std::string>& args, const std::filesystem::path& log);
+// Writes all of `bytes` to a child's input; false if the child no longer reads it.
+bool write_to_child(const PipedChild& child, std::span<const std::uint8_t> bytes);
 
 // Waits for a child started above. Returns its exit code, or 128 + the signal that ended it.
 int wait_for_child(pid_t pid);
