@@ -70,7 +70,7 @@ splat::Image8 decode_jpeg_rgb8(std::span<const std::uint8_t> bytes, const std::s
 void write_jpeg_rgb8(const std::filesystem::path& path, const splat::Image8& image, int quality) {
   if (image.channels != 3 || image.width < 1 || image.height < 1) throw splat::Error(path.string() + ": expected a non-empty RGB image");
   write_atomically(path, [&](const std::filesystem::path& tmp) {
-    ImageSource file(std::fopen(tmp.c_str(), "wb"));
+    std::unique_ptr<std::FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
     if (!file) throw splat::Error(tmp.string() + ": cannot open for writing");
     jpeg_compress_struct info;
     JpegError err;

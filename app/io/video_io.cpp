@@ -45,7 +45,7 @@ void Mp4Writer::require_encoder(const std::filesystem::path& path) {
 }
 
 Mp4Writer::Mp4Writer(const std::filesystem::path& path, int width, int height, double fps)
-    : encoder_(std::make_unique<Encoder>()), path_(path), width_(width), height_(height) {
+    : encoder_(std::make_unique<Encoder>()), path_(path) {
   if (width < 2 || height < 2 || width % 2 != 0 || height % 2 != 0) {
     fail(path, "H.264 needs an even width and height, got " + std::to_string(width) + "x" + std::to_string(height));
   }

@@ -28,7 +28,6 @@ class Mp4Writer {
   struct Encoder;
   std::unique_ptr<Encoder> encoder_;
   std::filesystem::path path_;
-  int width_, height_;
   std::size_t frames_ = 0;
 };
 

@@ -38,6 +38,22 @@ pid_t spawn(const std::vector<std::string>& args, posix_spawn_file_actions_t& ac
   return pid;
 }
 
+// spawn with standard output and error appended to `log`, standard input read from `input`
+// (-1: /dev/null).
+pid_t spawn_logged(const std::vector<std::string>& args, const std::filesystem::path& log, int input,
+                   const std::vector<std::string>& environment = {}) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  if (input < 0) {
+    posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  } else {
+    posix_spawn_file_actions_adddup2(&actions, input, STDIN_FILENO);  // dup2 clears close-on-exec
+  }
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  return spawn(args, actions, environment);
+}
+
 int exit_code_of(int status) {
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
 }
@@ -48,13 +64,7 @@ std::filesystem::path this_executable() { return std::filesystem::read_symlink("
 
 pid_t start_logged(const std::vector<std::string>& args, const std::filesystem::path& log,
                    const std::vector<std::string>& environment) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  return spawn(args, actions, environment);
+  return spawn_logged(args, log, -1, environment);
 }
 
 PipedChild start_piped(const std::vector<std::string>& args, const std::filesystem::path& log) {
@@ -62,15 +72,9 @@ PipedChild start_piped(const std::vector<std::string>& args, const std::filesyst
   if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) {
     throw splat::Error(std::string("socketpair: ") + std::strerror(errno));
   }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], STDIN_FILENO);  // dup2 clears close-on-exec
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   PipedChild child;
   try {
-    child.pid = spawn(args, actions);
+    child.pid = spawn_logged(args, log, fds[1]);
   } catch (...) {
     close(fds[0]);
     close(fds[1]);
