@@ -59,3 +59,15 @@ function(gslam_precompile_headers target)
     target_compile_options(${target} PRIVATE -Wno-stringop-overflow -Wno-array-bounds)
   endif()
 endfunction()
+
+# The targets a folder defines after this call compile their files eight to a compiler run (one
+# generated file that includes them): the headers those files share (json, GoogleTest, CLI11,
+# Eigen, OpenCV) are parsed and their templates compiled once a batch rather than once a file.
+# For the app and the tests only: the rasterizer's, tracking's and mapping's kernels compile file
+# by file, so that what the compiler inlines there (and contracts into FMAs) never depends on
+# which files share a batch. Files in one batch share a scope: helpers of the same name in two
+# files' anonymous namespaces collide there (give shared helpers one home; rename the rest).
+macro(gslam_unity_build)
+  set(CMAKE_UNITY_BUILD ${GSLAM_UNITY_BUILD})
+  set(CMAKE_UNITY_BUILD_BATCH_SIZE 8)
+endmacro()

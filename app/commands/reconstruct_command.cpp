@@ -24,7 +24,7 @@ constexpr char kCheckpointFile[] = "checkpoint.bin";
 
 // What a run reads: its dataset, dataset options and SLAM configuration; with --resume, the
 // interrupted run's, from its checkpoint.
-struct RunPlan {
+struct RunInputs {
   std::filesystem::path input;
   DatasetOptions dataset_options;
   SlamConfig config;
@@ -32,7 +32,7 @@ struct RunPlan {
   std::optional<RunCheckpoint> checkpoint;
 };
 
-RunPlan plan_resume(const ReconstructOptions& o) {
+RunInputs plan_resume(const ReconstructOptions& o) {
   if (!o.dataset.empty() || !o.config.empty() || !o.dataset_options.intrinsics.empty() ||
       o.dataset_options.depth_scale > 0 || o.dataset_options.max_frames > 0 || o.test_every > 0 || o.overwrite) {
     throw splat::Error("reconstruct --resume continues with the interrupted run's dataset and configuration: "
@@ -42,7 +42,7 @@ RunPlan plan_resume(const ReconstructOptions& o) {
   if (!std::filesystem::exists(file)) {
     throw splat::Error(file.string() + ": no checkpoint to resume (the run completed, or stopped before its first checkpoint)");
   }
-  RunPlan plan;
+  RunInputs plan;
   plan.checkpoint = read_run_checkpoint(file);
   const nlohmann::json& run = plan.checkpoint->run;
   if (!run.contains("extra") || !run["extra"].contains("input")) throw splat::Error(file.string() + ": records no input");
@@ -54,8 +54,9 @@ RunPlan plan_resume(const ReconstructOptions& o) {
   return plan;
 }
 
-RunPlan plan_new_run(const ReconstructOptions& o) {
-  RunPlan plan{o.dataset, o.dataset_options, load_slam_config(o.config), o.test_every, std::nullopt};  // first: a bad file costs nothing
+RunInputs plan_new_run(const ReconstructOptions& o) {
+  RunInputs plan{o.dataset, o.dataset_options, load_slam_config(o.config), o.test_every,
+                 std::nullopt};  // first: a bad file costs nothing
   if (plan.input.empty() && !o.out.empty()) {
     plan.input = o.out / "synthetic_input";
     std::fprintf(stderr, "no dataset given: generating the bundled synthetic sequence into %s\n", plan.input.c_str());
@@ -72,7 +73,7 @@ int run_reconstruct(const ReconstructOptions& o) {
     return 0;
   }
   if (o.out.empty()) throw splat::Error("reconstruct: --out is required");
-  RunPlan plan = o.resume ? plan_resume(o) : plan_new_run(o);
+  RunInputs plan = o.resume ? plan_resume(o) : plan_new_run(o);
   const SlamConfig& config = plan.config;
   const std::filesystem::path& input = plan.input;
   const Dataset dataset = open_dataset(input, plan.dataset_options);

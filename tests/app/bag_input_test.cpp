@@ -32,16 +32,17 @@
 
 namespace {
 
-using gslam::test::TempDir;
 using gslam::test::colour_bytes;
 using gslam::test::float_bytes;
 using gslam::test::kMountQ;
 using gslam::test::kMountT;
+using gslam::test::kTeddyFolder;
 using gslam::test::kTeddyK;
 using gslam::test::mocap;
+using gslam::test::open_teddy;
 using gslam::test::ros_time;
+using gslam::test::TempDir;
 using gslam::test::Transform;
-constexpr char kTeddy[] = "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy";
 // Frames in the recordings: enough for the trajectory comparison, few for the test time.
 constexpr int kFrames = 20;
 // Bag and folder runs read the same floats, so their trajectories agree to rounding; the issue's
@@ -193,13 +194,6 @@ void write_teddy_mcap(const app::Dataset& folder, const McapSpec& spec,
   std::filesystem::remove_all(raw);
 }
 
-app::Dataset open_teddy(int frames, const std::string& intrinsics = "") {
-  app::DatasetOptions o;
-  o.max_frames = frames;
-  o.intrinsics = intrinsics;
-  return app::open_dataset(gslam::test::shared_data(kTeddy), o);
-}
-
 // Frames, stamps, camera and ground truth of `bag` equal the folder's.
 void expect_same_frames(const app::Dataset& folder, const app::Dataset& bag, int frames) {
   ASSERT_EQ(bag.entries.size(), std::size_t(frames));
@@ -246,7 +240,7 @@ void expect_same_reconstruction(const std::filesystem::path& recording, const Te
   const int frames = gslam::test::test_time_scale() > 1 ? 10 : kFrames;
   const std::string common = " --max-frames " + std::to_string(frames) +
                              " --backend cpu --config " + (dir / "quick.json").string();
-  const auto folder = run_gslam("reconstruct " + gslam::test::shared_data(kTeddy).string() +
+  const auto folder = run_gslam("reconstruct " + gslam::test::shared_data(kTeddyFolder).string() +
                                 " --out " + (dir / "folder_run").string() + common);
   ASSERT_EQ(folder.exit_code, 0) << folder.output;
   const auto bag =
@@ -289,8 +283,8 @@ class McapInput : public ::testing::Test {
   void SetUp() override {
     const std::string missing = mcap_writer_missing();
     GSLAM_REQUIRE_TOOL(missing.empty(), "the MCAP reference writer is unavailable: " + missing);
-    if (gslam::test::shared_data(kTeddy).empty())
-      GTEST_SKIP() << "shared data " << kTeddy << " not found";
+    if (gslam::test::shared_data(kTeddyFolder).empty())
+      GTEST_SKIP() << "shared data " << kTeddyFolder << " not found";
   }
 };
 
@@ -301,7 +295,7 @@ TEST_F(McapInput, ReferenceWriterFileGivesTheFolderFramesAndTrajectory) {
   McapSpec spec;  // zstd chunks, bgr8 colour, 32FC1 depth
   spec.tf = true;
   write_teddy_mcap(folder, spec, mcap);
-  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt",
+  std::filesystem::copy_file(gslam::test::shared_data(kTeddyFolder) / "groundtruth.txt",
                              dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(mcap);
   EXPECT_EQ(bag.format, "mcap");
@@ -434,7 +428,7 @@ TEST_F(McapInput, BadRecordingsGiveOneLineErrors) {
   // Topic options are for recordings only.
   o = {};
   o.color_topic = "/x";
-  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddy), o),
+  GSLAM_EXPECT_ERROR(app::open_dataset(gslam::test::shared_data(kTeddyFolder), o),
                      "--color-topic, --depth-topic and --gt-frames are for ROS recordings");
 }
 
@@ -492,8 +486,8 @@ class Ros1BagInput : public ::testing::Test {
     GSLAM_REQUIRE_TOOL(
         false, "gslam was built without ROS 1 (scripts/install_deps.sh installs librosbag-dev)");
 #endif
-    if (gslam::test::shared_data(kTeddy).empty())
-      GTEST_SKIP() << "shared data " << kTeddy << " not found";
+    if (gslam::test::shared_data(kTeddyFolder).empty())
+      GTEST_SKIP() << "shared data " << kTeddyFolder << " not found";
   }
 };
 
@@ -502,7 +496,7 @@ TEST_F(Ros1BagInput, RosbagFileGivesTheFolderFramesAndTrajectory) {
   TempDir dir;
   const app::Dataset folder = open_teddy(kFrames);
   gslam::test::write_teddy_bag(folder, 0, kFrames, dir / "teddy.bag");
-  std::filesystem::copy_file(gslam::test::shared_data(kTeddy) / "groundtruth.txt",
+  std::filesystem::copy_file(gslam::test::shared_data(kTeddyFolder) / "groundtruth.txt",
                              dir / "groundtruth.txt");
   const app::Dataset bag = app::open_dataset(dir / "teddy.bag");
   EXPECT_EQ(bag.format, "rosbag");

@@ -9,16 +9,14 @@
 #include "batch/opencv_baseline.h"
 #include "batch/sequence_finder.h"
 #include "datasets/synthetic_sequence.h"
+#include "support/json_file.h"
 #include "support/temp_dir.h"
 
 namespace {
 
 using gslam::test::TempDir;
 
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using gslam::test::read_json;
 
 void write_sequence(const std::filesystem::path& dir, int frames) {
   app::SyntheticOptions o;

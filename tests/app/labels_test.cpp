@@ -1,18 +1,19 @@
 // Label images through the commands: generate --labels, reconstruct (the map's classes fused
 // into map.ply), eval (mIoU against label images, held-out views apart), with clean and with
 // noisy labels; and the one-line errors of bad label folders.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <fstream>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "app/run_gslam.h"
 #include "commands/label_maps.h"
 #include "datasets/dataset.h"
 #include "io/image_io.h"
 #include "io/map_io.h"
+#include "support/json_file.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -28,10 +29,7 @@ std::string last_line(const std::string& output) {
   return output.substr(start == std::string::npos ? 0 : start + 1, end + 1 - (start == std::string::npos ? 0 : start + 1)) + "\n";
 }
 
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using gslam::test::read_json;
 
 // A copy of `from`'s label images in `to` with `share` of their pixels set to a random listed
 // class (another class or the same: what a poor segmenter gets wrong).

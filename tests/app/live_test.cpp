@@ -5,15 +5,16 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "io/image_io.h"
-#include "viewer/live_view.h"
 #include "app/run_gslam.h"
 #include "datasets/synthetic_sequence.h"
+#include "io/image_io.h"
 #include "io/trajectory.h"
 #include "splat/vulkan_rasterizer.h"
-#include "support/random_scene.h"
 #include "support/image_counts.h"
+#include "support/json_file.h"
+#include "support/random_scene.h"
 #include "support/temp_dir.h"
+#include "viewer/live_view.h"
 
 namespace {
 
@@ -32,10 +33,7 @@ std::filesystem::path synthetic(const TempDir& dir, int frames) {
   return dir / "seq";
 }
 
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using gslam::test::read_json;
 
 TEST(LiveView, ComposesMapTrajectoryCameraAndInput) {
   gslam::test::SceneOptions o;

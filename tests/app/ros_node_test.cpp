@@ -17,6 +17,7 @@
 #include "app/run_gslam.h"
 #include "datasets/dataset.h"
 #include "io/trajectory.h"
+#include "support/json_file.h"
 #include "support/require_tool.h"
 #include "support/ros_graph.h"
 #include "support/teddy_recording.h"
@@ -25,12 +26,13 @@
 
 namespace {
 
+using gslam::test::kTeddyFolder;
+using gslam::test::open_teddy;
 using gslam::test::RosGraph;
 using gslam::test::TempDir;
 
-constexpr char kTeddy[] = "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy";
 // Frames per bag: two bags, the map reset between them.
-constexpr int kFrames = 40;
+constexpr int kFramesPerBag = 40;
 // A hung node is a failure, not a wait forever; a loaded machine gets far more than it needs, and
 // the test still fails with its message well before ctest's limit (600 s) would stop it silently.
 constexpr std::chrono::seconds kEventTimeout{240};
@@ -41,17 +43,7 @@ const std::string kNode = GSLAM_ROS_BINARY;
 const std::string kNode;
 #endif
 
-// The first `frames` shared teddy frames.
-app::Dataset open_teddy(int frames) {
-  app::DatasetOptions options;
-  options.max_frames = frames;
-  return app::open_dataset(gslam::test::shared_data(kTeddy), options);
-}
-
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using gslam::test::read_json;
 
 // One transform the node published on /tf, as rostopic echo -p wrote it.
 struct PublishedPose {
@@ -174,12 +166,13 @@ NodeRun start_node(const std::vector<std::string>& args, std::string& why_not) {
   return r;
 }
 
-// start_node, and the first kFrames teddy frames written as a bag in the graph's folder (NodeRun::bag).
+// start_node, and the first kFramesPerBag teddy frames written as a bag in the graph's folder
+// (NodeRun::bag).
 NodeRun start_node_with_teddy_bag(const std::vector<std::string>& args, std::string& why_not) {
   NodeRun r = start_node(args, why_not);
   if (!r.graph) return r;
   r.bag = r.graph->dir() / "teddy.bag";
-  gslam::test::write_teddy_bag(open_teddy(kFrames), 0, kFrames, r.bag);
+  gslam::test::write_teddy_bag(open_teddy(kFramesPerBag), 0, kFramesPerBag, r.bag);
   return r;
 }
 
@@ -268,11 +261,12 @@ TEST_F(RosNode, LaunchFileStartsTheBuiltNodeWithItsRemappings) {
 // image, ~save writes a run folder, ~reset starts a new map for the second bag, and after Ctrl-C
 // the run folder holds the second bag's trajectory, which evaluates against the ground truth.
 TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
-  if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+  if (gslam::test::shared_data(kTeddyFolder).empty())
+    GTEST_SKIP() << "shared data " << kTeddyFolder << " not found";
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
-  const app::Dataset teddy = open_teddy(2 * kFrames);
+  const app::Dataset teddy = open_teddy(2 * kFramesPerBag);
   std::string why_not;
   NodeRun r = start_node({"_queue_size:=1000"}, why_not);
   GSLAM_REQUIRE_TOOL(r.graph, why_not);
@@ -280,14 +274,15 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   const std::filesystem::path first = graph->dir() / "first.bag", second = graph->dir() / "second.bag", run = r.run,
                               tf = r.tf;
   const pid_t node = r.node;
-  gslam::test::write_teddy_bag(teddy, 0, kFrames, first);
-  gslam::test::write_teddy_bag(teddy, kFrames, kFrames, second);
+  gslam::test::write_teddy_bag(teddy, 0, kFramesPerBag, first);
+  gslam::test::write_teddy_bag(teddy, kFramesPerBag, kFramesPerBag, second);
   const pid_t first_player = start_player(*graph, first, kImageTopics, "play_first.log");
-  const std::vector<PublishedPose> first_poses = wait_for_poses(tf, kFrames);
+  const std::vector<PublishedPose> first_poses = wait_for_poses(tf, kFramesPerBag);
   graph->interrupt(first_player);
-  ASSERT_EQ(first_poses.size(), std::size_t(kFrames))
-      << gslam::test::read_text(graph->dir() / "node.log") << gslam::test::read_text(graph->dir() / "play_first.log");
-  for (int i = 0; i < kFrames; ++i) {  // each pose carries its colour image's stamp
+  ASSERT_EQ(first_poses.size(), std::size_t(kFramesPerBag))
+      << gslam::test::read_text(graph->dir() / "node.log")
+      << gslam::test::read_text(graph->dir() / "play_first.log");
+  for (int i = 0; i < kFramesPerBag; ++i) {  // each pose carries its colour image's stamp
     EXPECT_NEAR(first_poses[std::size_t(i)].stamp, teddy.entries[std::size_t(i)].timestamp, 1e-6) << "frame " << i;
     EXPECT_EQ(first_poses[std::size_t(i)].child, "camera") << "the bag's images have no frame_id";
   }
@@ -301,15 +296,16 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   EXPECT_NE(render.output.find("height: 240\nwidth: 320\nencoding: \"rgb8\""), std::string::npos) << render.output;
   const auto save = graph->run("rosservice call /gslam/save");
   EXPECT_NE(save.output.find("success: True"), std::string::npos) << save.output;
-  EXPECT_EQ(app::read_tum_trajectory(run / "trajectory.txt").size(), std::size_t(kFrames));
+  EXPECT_EQ(app::read_tum_trajectory(run / "trajectory.txt").size(), std::size_t(kFramesPerBag));
   const auto reset = graph->run("rosservice call /gslam/reset");
   EXPECT_NE(reset.output.find("success: True"), std::string::npos) << reset.output;
 
   const pid_t second_player = start_player(*graph, second, kImageTopics, "play_second.log");
-  const std::vector<PublishedPose> poses = wait_for_poses(tf, 2 * kFrames);
+  const std::vector<PublishedPose> poses = wait_for_poses(tf, 2 * kFramesPerBag);
   graph->interrupt(second_player);
-  ASSERT_EQ(poses.size(), std::size_t(2 * kFrames))
-      << gslam::test::read_text(graph->dir() / "node.log") << gslam::test::read_text(graph->dir() / "play_second.log");
+  ASSERT_EQ(poses.size(), std::size_t(2 * kFramesPerBag))
+      << gslam::test::read_text(graph->dir() / "node.log")
+      << gslam::test::read_text(graph->dir() / "play_second.log");
   EXPECT_EQ(graph->interrupt(node), 0) << gslam::test::read_text(graph->dir() / "node.log");
 
   // The run folder is the second bag's run, complete as `gslam live` writes it.
@@ -317,11 +313,12 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   EXPECT_EQ(summary.at("input").at("format"), "ros");
   EXPECT_EQ(summary.at("live").at("frames_dropped").get<int>(), 0);
   const auto trajectory = app::read_tum_trajectory(run / "trajectory.txt");
-  ASSERT_EQ(trajectory.size(), std::size_t(kFrames));
-  const auto eval = run_gslam("eval " + run.string() + " --dataset " + gslam::test::shared_data(kTeddy).string());
+  ASSERT_EQ(trajectory.size(), std::size_t(kFramesPerBag));
+  const auto eval = run_gslam("eval " + run.string() + " --dataset " +
+                              gslam::test::shared_data(kTeddyFolder).string());
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   const nlohmann::json e = read_json(run / "eval.json");
-  EXPECT_EQ(e.at("ate").at("matched_frames").get<int>(), kFrames);
+  EXPECT_EQ(e.at("ate").at("matched_frames").get<int>(), kFramesPerBag);
   EXPECT_LT(e.at("ate").at("rmse_m").get<double>(), 0.02) << "teddy tracks to a centimetre or better";
 
   // /tf holds the poses as tracked; trajectory.txt has them as mapping corrected them since. The
@@ -329,8 +326,8 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   Eigen::Isometry3d body_from_optical = Eigen::Isometry3d::Identity();
   body_from_optical.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   std::vector<double> differences, latencies;
-  for (int i = 0; i < kFrames; ++i) {
-    const PublishedPose& p = poses[std::size_t(kFrames + i)];
+  for (int i = 0; i < kFramesPerBag; ++i) {
+    const PublishedPose& p = poses[std::size_t(kFramesPerBag + i)];
     EXPECT_NEAR(p.stamp, trajectory[std::size_t(i)].timestamp, 1e-4);
     const Eigen::Isometry3d T_world_cam = body_from_optical.inverse() * p.T_parent_child;
     differences.push_back((T_world_cam.translation() - trajectory[std::size_t(i)].T_world_cam.translation()).norm());
@@ -338,7 +335,7 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
   }
   EXPECT_LT(percentile(differences, 0.5), 0.005);
   EXPECT_TRUE(poses.front().T_parent_child.translation().norm() < 1e-9 &&
-              poses[kFrames].T_parent_child.translation().norm() < 1e-9)
+              poses[kFramesPerBag].T_parent_child.translation().norm() < 1e-9)
       << "each map starts at its first camera";
   RecordProperty("tf_latency_p50_ms", std::to_string(1000 * percentile(latencies, 0.5)));
   RecordProperty("tf_latency_p95_ms", std::to_string(1000 * percentile(latencies, 0.95)));
@@ -352,7 +349,8 @@ TEST_F(RosNode, TracksBagsPlayedUnderRoscoreAndSavesAFolderThatEvaluates) {
 // the first frame. The bag's motion capture plays the robot's odometry here (world -> kinect, TUM's
 // pose of the colour camera): where tracking agrees with it, map -> odom stays at the identity.
 TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
-  if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+  if (gslam::test::shared_data(kTeddyFolder).empty())
+    GTEST_SKIP() << "shared data " << kTeddyFolder << " not found";
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else
@@ -366,15 +364,16 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
   // where odometry covers its stamp.
   const auto deadline = std::chrono::steady_clock::now() + kEventTimeout;
   std::size_t tracked = 0;
-  while (tracked < std::size_t(kFrames) && std::chrono::steady_clock::now() < deadline) {
+  while (tracked < std::size_t(kFramesPerBag) && std::chrono::steady_clock::now() < deadline) {
     if (r.graph->run("rosservice call /gslam/save").output.find("success: True") != std::string::npos)
       tracked = app::read_tum_trajectory(r.run / "trajectory.txt").size();
   }
   r.graph->interrupt(player);
-  EXPECT_EQ(tracked, std::size_t(kFrames)) << r.log() << gslam::test::read_text(r.graph->dir() / "play.log");
+  EXPECT_EQ(tracked, std::size_t(kFramesPerBag))
+      << r.log() << gslam::test::read_text(r.graph->dir() / "play.log");
   EXPECT_EQ(r.graph->interrupt(r.node), 0) << r.log();
   const std::vector<PublishedPose> poses = published_poses(r.tf);
-  EXPECT_GT(poses.size(), std::size_t(kFrames / 2)) << r.log();
+  EXPECT_GT(poses.size(), std::size_t(kFramesPerBag / 2)) << r.log();
   // map -> odom is the tracked pose's difference from the motion capture, both anchored at the
   // first frame (no alignment as ATE makes): 2-2.5 cm at most here; a wrong convention (an
   // optical frame taken as a body one, the map anchored elsewhere) is off by metres and radians.
@@ -390,7 +389,8 @@ TEST_F(RosNode, WithAnOdometryFramePublishesMapToOdomThatStaysPut) {
 // Ctrl-C while the camera goes on publishing (a looping bag): the node stops taking frames, writes
 // its run folder and exits cleanly, whatever arrives meanwhile.
 TEST_F(RosNode, CtrlCWhileTheCameraKeepsPublishingWritesTheRunFolder) {
-  if (gslam::test::shared_data(kTeddy).empty()) GTEST_SKIP() << "shared data " << kTeddy << " not found";
+  if (gslam::test::shared_data(kTeddyFolder).empty())
+    GTEST_SKIP() << "shared data " << kTeddyFolder << " not found";
 #ifndef GSLAM_HAVE_ROS1
   GSLAM_REQUIRE_TOOL(false, "gslam was built without ROS 1 (the test writes bags with rosbag)");
 #else

@@ -37,7 +37,7 @@ app::SlamConfig checkpoint_config() {
   return config;
 }
 
-struct RunResult {
+struct SystemRun {
   std::vector<Eigen::Isometry3d> trajectory;
   splat::Gaussians map;
   bool overlapped = false;  // SlamSystem::mapping_overlapped()
@@ -58,7 +58,7 @@ std::unique_ptr<splat::Rasterizer> cpu_rasterizer() { return splat::make_cpu_ras
 
 // Processes frames [0, stop), checkpoints through `file`, continues in a new system (and a new
 // rasterizer) from [stop, end), then sweeps. stop = end: never checkpointed.
-RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesystem::path& file,
+SystemRun run(const app::Dataset& dataset, std::size_t stop, const std::filesystem::path& file,
               const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
   const auto load = [&](std::size_t i) { return dataset.load(i); };
   const app::SlamConfig config = checkpoint_config();
@@ -66,7 +66,7 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
   auto first_rasterizer = make_rasterizer(), second_rasterizer = make_rasterizer();
   auto slam = std::make_unique<app::SlamSystem>(*first_rasterizer, config);
   for (std::size_t i = 0; i < stop; ++i) slam->process(load(i));
-  RunResult result;
+  SystemRun result;
   if (stop < dataset.entries.size()) {
     const app::SlamSystem::State state = slam->state();
     result.moving_carried = !state.tracker.moving.empty();
@@ -99,8 +99,8 @@ RunResult run(const app::Dataset& dataset, std::size_t stop, const std::filesyst
 }
 
 struct Runs {
-  RunResult straight;
-  std::vector<RunResult> continued;  // one per stop
+  SystemRun straight;
+  std::vector<SystemRun> continued;  // one per stop
 };
 
 // Stopped at each of `stops`, the run ends bit for bit as the one that never stopped.
@@ -108,9 +108,9 @@ Runs expect_continued_runs_end_as_the_straight_one(
     const app::Dataset& dataset, const std::vector<std::size_t>& stops,
     const std::filesystem::path& file, const MakeRasterizer& make_rasterizer = cpu_rasterizer) {
   Runs runs{run(dataset, dataset.entries.size(), {}, make_rasterizer), {}};
-  const RunResult& straight = runs.straight;
+  const SystemRun& straight = runs.straight;
   for (std::size_t stop : stops) {
-    const RunResult& resumed =
+    const SystemRun& resumed =
         runs.continued.emplace_back(run(dataset, stop, file, make_rasterizer));
     if (resumed.trajectory.size() != straight.trajectory.size()) {
       ADD_FAILURE() << "stopped at " << stop << ": " << resumed.trajectory.size() << " poses, " << straight.trajectory.size() << " straight";
@@ -156,7 +156,7 @@ TEST(RunCheckpoint, RunWithMovingObjectsContinuesExactlyAsTheRunThatNeverStopped
   EXPECT_GE(runs.straight.frames_moving, 10u);
   // Each of the three was carried by some checkpoint (the person is found near every stop).
   std::size_t moving = 0, references = 0, covisible = 0;
-  for (const RunResult& continued : runs.continued) {
+  for (const SystemRun& continued : runs.continued) {
     moving += continued.moving_carried;
     references += continued.reference_labels;
     covisible += continued.covisible_labels;

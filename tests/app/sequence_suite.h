@@ -3,11 +3,11 @@
 #pragma once
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "datasets/synthetic_sequence.h"
+#include "support/json_file.h"
 
 namespace gslam::test {
 
@@ -23,11 +23,6 @@ inline void write_tiny_sequence(const std::filesystem::path& dir, int frames, ui
 inline std::filesystem::path write_quick_config(const std::filesystem::path& path) {
   std::ofstream(path) << R"({"refine_passes": 1, "mapping": {"iterations": 3}})";
   return path;
-}
-
-inline nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
 }
 
 // A table's rows (benchmark.json or batch.json) without the times and memory, which differ from

@@ -1,14 +1,14 @@
 // Which way is up: estimate_world_up on hand-built maps, summary.json's world_up on a generated
 // sequence with known truth, and map.glb standing upright in glTF's axes (+Y up) while gslam
 // reads it back in the run's world frame.
+#include <gtest/gtest.h>
+#include <tiny_gltf.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
-#include <tiny_gltf.h>
 
 #include "app/run_gslam.h"
 #include "datasets/synthetic_sequence.h"
@@ -16,6 +16,7 @@
 #include "io/ply_io.h"
 #include "io/trajectory.h"
 #include "splat/error.h"
+#include "support/json_file.h"
 #include "support/random_scene.h"
 #include "support/temp_dir.h"
 #include "viewer/views.h"
@@ -216,10 +217,7 @@ TEST(GltfWorldUp, IdentityWritesNoNodeTransform) {
   EXPECT_FALSE(model.nodes[0].extras.IsObject());
 }
 
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
+using gslam::test::read_json;
 
 // Through the CLI: the generated room's up (world -y, the generator's y points down) seen from
 // the first camera, against what reconstruct records; map.glb upright; render's orbit using it.

@@ -5,11 +5,20 @@
 #include <fstream>
 #include <sstream>
 
+#include "support/test_data.h"
+
 #ifdef GSLAM_HAVE_ROS1
 #include "support/ros1_bag_writer.h"
 #endif
 
 namespace gslam::test {
+
+app::Dataset open_teddy(int frames, const std::string& intrinsics) {
+  app::DatasetOptions o;
+  o.max_frames = frames;
+  o.intrinsics = intrinsics;
+  return app::open_dataset(shared_data(kTeddyFolder), o);
+}
 
 std::array<std::uint32_t, 2> ros_time(const std::string& stem) {
   const auto dot = stem.find('.');

@@ -12,6 +12,11 @@
 
 namespace gslam::test {
 
+// The shared teddy folder (under ../shared/data), and its first `frames` frames; `intrinsics` as
+// the command line's --intrinsics (empty: the folder's own camera).
+constexpr char kTeddyFolder[] = "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy";
+app::Dataset open_teddy(int frames, const std::string& intrinsics = "");
+
 // The TUM fr3 Kinect's calibrated colour camera (as the folder's freiburg3 preset).
 constexpr std::array<double, 9> kTeddyK = {535.4, 0, 320.1, 0, 539.2, 247.6, 0, 0, 1};
 

@@ -17,10 +17,10 @@
 
 namespace {
 
-struct PoseError {
+struct MotionError {
   double translation_m, rotation_deg;
 };
-PoseError pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+MotionError motion_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d d = a.inverse() * b;
   return {d.translation().norm(), Eigen::AngleAxisd(d.linear()).angle() * 180 / M_PI};
 }
@@ -47,7 +47,8 @@ TEST(RgbdOdometry, AlignsSyntheticFramesFromIdentityToThreeMillimetres) {
     const tracking::OdometryFrame frame(d.load(cur), config);
     const Eigen::Isometry3d truth = true_motion(d, 0, cur);
     const tracking::OdometryResult r = tracking::align_rgbd(ref, frame, Eigen::Isometry3d::Identity(), config);
-    const PoseError before = pose_error(Eigen::Isometry3d::Identity(), truth), after = pose_error(r.T_cur_ref, truth);
+    const MotionError before = motion_error(Eigen::Isometry3d::Identity(), truth),
+                      after = motion_error(r.T_cur_ref, truth);
     EXPECT_TRUE(r.converged) << r.reason;
     // The floor is the sampling: 3000 points a level (the default) left 0.6-1.5 mm here, 20000
     // 0.2 mm; leaving out points at depth edges and holes (the default: on real sequences it
@@ -127,8 +128,14 @@ TEST(RgbdOdometry, BlurAwareDepthWeightAlignsBlurredFramesBetter) {
     tracking::OdometryConfig aware = config;
     aware.depth_weight = tracking::blur_aware_depth_weight(config, cur, rate, 0);
     peak_weight = std::max(peak_weight, aware.depth_weight);
-    sharp_error += pose_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), config).T_cur_ref, truth).translation_m;
-    aware_error += pose_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), aware).T_cur_ref, truth).translation_m;
+    sharp_error +=
+        motion_error(
+            tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), config).T_cur_ref, truth)
+            .translation_m;
+    aware_error +=
+        motion_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), aware).T_cur_ref,
+                     truth)
+            .translation_m;
   }
   const double pairs = static_cast<double>(d.entries.size() - 1);
   std::printf("blurred pairs: mean error %.2f mm at depth weight %.2f, %.2f mm blur-aware (up to %.2f)\n",
@@ -172,8 +179,8 @@ TEST(RgbdOdometry, FitsTheColourGainOfAutoExposure) {
       EXPECT_NEAR(with.gain, expected_gain, 0.01)
           << "frame " << later << (forward ? " after" : " before") << " frame 0";
       EXPECT_EQ(without.gain, 1.0);
-      const double e_with = pose_error(with.T_cur_ref, truth).translation_m,
-                   e_without = pose_error(without.T_cur_ref, truth).translation_m;
+      const double e_with = motion_error(with.T_cur_ref, truth).translation_m,
+                   e_without = motion_error(without.T_cur_ref, truth).translation_m;
       std::printf(
           "frames 0 and %zu (%s), gain %.3f (fitted %.3f): error %.2f mm fitted, %.2f mm without\n",
           later, forward ? "brighter" : "darker", expected_gain, with.gain, e_with * 1e3,
@@ -229,7 +236,7 @@ TEST(RgbdOdometry, DepthSpreadIgnoresAnOccluderInFrontOfTheScene) {
       ref, tracking::OdometryFrame(occluded, config), Eigen::Isometry3d::Identity(), config);
   ASSERT_TRUE(clear.converged) << clear.reason;
   ASSERT_TRUE(r.converged) << r.reason;
-  const PoseError e = pose_error(r.T_cur_ref, true_motion(d, 0, 2));
+  const MotionError e = motion_error(r.T_cur_ref, true_motion(d, 0, 2));
   EXPECT_LT(e.translation_m, 0.003);
   EXPECT_LT(e.rotation_deg, 0.2);
   std::printf(

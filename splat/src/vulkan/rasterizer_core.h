@@ -6,12 +6,18 @@
 #include <mutex>
 #include <vector>
 
+#include "shader_io.h"
 #include "splat/rasterizer.h"
 #include "splat/resident_map.h"
 #include "vulkan/compute.h"
 #include "vulkan/device_sort.h"
 
 namespace splat::vk {
+
+// Workgroups of kGroupSize invocations that cover `count` items.
+inline uint32_t groups_for(std::size_t count) {
+  return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
+}
 
 // A map's five parameter arrays on the device (frame.glsl's bindings 1..5).
 struct DeviceMap {

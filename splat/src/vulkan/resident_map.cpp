@@ -31,10 +31,6 @@ static_assert(sizeof(io::AdamParams) == 56 && sizeof(io::FreeSpaceParams) == 96,
 // Vulkan guarantees 65535 workgroups along x; the loss's stages take 256 pixels each.
 constexpr std::size_t kMaxTargetPixels = std::size_t{65535} * io::kGroupSize;
 
-uint32_t groups_for(std::size_t count) {
-  return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
-}
-
 // Discards what the batch recorded when the operation it guards throws half-way: its commands
 // refer to buffers the next user of the batch may reallocate.
 class DiscardOnThrow {

@@ -33,10 +33,6 @@ namespace {
 
 constexpr uint32_t kParamFloats = io::kGeometryFloats;  // d_params per Gaussian
 
-uint32_t groups_for(std::size_t count) {
-  return static_cast<uint32_t>((count + io::kGroupSize - 1) / io::kGroupSize);
-}
-
 // Device buffers of one rendered frame; recycled through the rasterizer's pool.
 struct FrameState {
   explicit FrameState(Context& c)
