@@ -128,14 +128,13 @@ TEST(RgbdOdometry, BlurAwareDepthWeightAlignsBlurredFramesBetter) {
     tracking::OdometryConfig aware = config;
     aware.depth_weight = tracking::blur_aware_depth_weight(config, cur, rate, 0);
     peak_weight = std::max(peak_weight, aware.depth_weight);
-    sharp_error +=
-        motion_error(
-            tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), config).T_cur_ref, truth)
-            .translation_m;
-    aware_error +=
-        motion_error(tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), aware).T_cur_ref,
-                     truth)
-            .translation_m;
+    const auto error_m = [&](const tracking::OdometryConfig& c) {
+      return motion_error(
+                 tracking::align_rgbd(ref, cur, Eigen::Isometry3d::Identity(), c).T_cur_ref, truth)
+          .translation_m;
+    };
+    sharp_error += error_m(config);
+    aware_error += error_m(aware);
   }
   const double pairs = static_cast<double>(d.entries.size() - 1);
   std::printf("blurred pairs: mean error %.2f mm at depth weight %.2f, %.2f mm blur-aware (up to %.2f)\n",
