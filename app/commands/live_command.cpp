@@ -173,7 +173,10 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
         ++paused_dropped;
         continue;
       }
-      const FrameRecord record = live->process(arrived->frame);
+      const splat::Camera camera = arrived->frame.camera;
+      std::optional<splat::Image8> shown;
+      if (window) shown = to_image8(arrived->frame);
+      const FrameRecord record = live->process(std::move(arrived->frame));
       const double ms =
           std::chrono::duration<double, std::milli>(Clock::now() - arrived->arrived).count();
       latency.add(ms);
@@ -181,7 +184,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
         std::fprintf(stderr, "\nframe at %.3f s: tracking failed (%s)\n", record.timestamp,
                      record.reason.c_str());
       outputs->add(record, 0);
-      if (host) host->tracked(arrived->frame, record, *live);
+      if (host) host->tracked(camera, record, *live);
       if (arrived->T_world_cam_truth)
         truth.push_back({record.timestamp, *arrived->T_world_cam_truth});
       const std::size_t n = outputs->records().size();
@@ -197,7 +200,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
         shared.view.map = live->map();
         shared.view.trajectory.push_back(record.T_world_cam.translation());
         shared.view.T_world_cam = record.T_world_cam;
-        if (window) shared.view.input = to_image8(arrived->frame);
+        if (shown) shared.view.input = std::move(*shown);
         shared.stats = stats;
         shared.tracked = n;
       }

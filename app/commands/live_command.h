@@ -59,7 +59,8 @@ class LiveHost {
   // summary.json "input" (what eval and render read), written once the camera is known.
   virtual nlohmann::json input_json(const splat::Camera& intrinsics, const SlamConfig& config) const = 0;
   // After each frame, on the run's thread (the next frame waits for it).
-  virtual void tracked(const splat::RgbdFrame& frame, const FrameRecord& record, const SlamSystem& system) = 0;
+  virtual void tracked(const splat::Camera& camera, const FrameRecord& record,
+                       const SlamSystem& system) = 0;
   // Mapping went on while no frame came (it maps the keyframes it was given after the camera
   // stops): the map as it is now, on the run's thread; null after a reset.
   virtual void map_changed(std::shared_ptr<const splat::Gaussians> map) = 0;

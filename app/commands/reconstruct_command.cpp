@@ -120,10 +120,10 @@ int run_reconstruct(const ReconstructOptions& o) {
   FramePrefetch prefetch(load, first, dataset.entries.size());
   for (std::size_t i = first; i < dataset.entries.size() && !InterruptGuard::interrupted(); ++i) {
     const auto load_start = std::chrono::steady_clock::now();  // loading: the time spent waiting for it
-    const splat::RgbdFrame frame = prefetch.take(i);
+    splat::RgbdFrame frame = prefetch.take(i);
     const double loading_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
-    const FrameRecord record = slam.process(frame, is_held_out(i, plan.test_every));
+    const FrameRecord record = slam.process(std::move(frame), is_held_out(i, plan.test_every));
     if (!record.tracked) std::fprintf(stderr, "\nframe %zu: tracking failed (%s)\n", i, record.reason.c_str());
     const std::vector<LoopEvent> loops = slam.loop_events();
     for (; loops_reported < loops.size(); ++loops_reported) std::fprintf(stderr, "\n%s\n", describe(loops[loops_reported]).c_str());

@@ -180,7 +180,8 @@ class RosHost final : public LiveHost {
     return input;
   }
 
-  void tracked(const splat::RgbdFrame& frame, const FrameRecord& record, const SlamSystem& system) override {
+  void tracked(const splat::Camera& camera, const FrameRecord& record,
+               const SlamSystem& system) override {
     const std::string frame_id = source_->frame_id();
     if (record.tracked) connection_.publish_pose(record.timestamp, frame_id, record.T_world_cam);
     stamps_.push_back(record.timestamp);
@@ -194,7 +195,7 @@ class RosHost final : public LiveHost {
     }
     {
       std::lock_guard lock(draw_mutex_);
-      latest_ = Drawable{system.map(), record.T_world_cam, record.timestamp, frame.camera, frame_id};
+      latest_ = Drawable{system.map(), record.T_world_cam, record.timestamp, camera, frame_id};
     }
   }
 

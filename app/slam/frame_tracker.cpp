@@ -138,7 +138,7 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
                                 const std::function<Eigen::Isometry3d(std::size_t)>& keyframe_pose) {
   FrameRecord record;
   record.timestamp = frame.timestamp;
-  moved_.reset();
+  depth_moved_ = false;
   const auto start = std::chrono::steady_clock::now();
   if (config_.front_end == "odometry") {
     track_odometry(frame, keyframe_pose, record);
@@ -230,9 +230,13 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
                                              predicted_motion.translation().norm() / 1.0);
   const double offset = shift_px > 0.1 ? frame.depth_time_offset : 0.0;
   auto depth_moved_by = [&](const Eigen::Isometry3d& T_colour_depth) -> const splat::RgbdFrame& {
-    moved_ = splat::with_depth_at_colour_time(frame, T_colour_depth);
+    // Into the buffers of the frames before: fresh memory's first touches made live's slowest
+    // frames (docs/measurements.md).
+    moved_ = frame;
+    splat::move_depth_to_colour_time(moved_, T_colour_depth);
+    depth_moved_ = true;
     record.T_colour_depth = T_colour_depth;
-    return *moved_;
+    return moved_;
   };
   prepare_last(offset != 0 ? depth_moved_by(predicted_motion) : frame, prior);
   bool tracked = align_with_recovery(predict(frame.timestamp), keyframe_pose, record);
@@ -249,7 +253,8 @@ void FrameTracker::track_odometry(const splat::RgbdFrame& frame,
     }
   }
   moving_.clear();
-  if (detect && tracked) leave_out_moving(moved_ ? *moved_ : frame, keyframe_pose, !prior.empty(), record);
+  if (detect && tracked)
+    leave_out_moving(depth_moved_ ? moved_ : frame, keyframe_pose, !prior.empty(), record);
 }
 
 void FrameTracker::leave_out_moving(const splat::RgbdFrame& frame,

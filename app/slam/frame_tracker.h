@@ -107,7 +107,7 @@ class FrameTracker {
   const std::vector<uint8_t>& moving_labels() const { return moving_; }
   // The last tracked frame with its depth moved to its colour's instant (odometry), or null
   // where its depth was taken as it is (FrameRecord::T_colour_depth the identity).
-  const splat::RgbdFrame* depth_moved_frame() const { return moved_ ? &*moved_ : nullptr; }
+  const splat::RgbdFrame* depth_moved_frame() const { return depth_moved_ ? &moved_ : nullptr; }
   int moving_factor() const { return moving_factor_; }
   // An alignment's depth residual spread against the recently tracked frames' (residual_ratio()).
   double residual_ratio(double spread) const {
@@ -181,7 +181,8 @@ class FrameTracker {
   std::deque<double> residual_spreads_;  // depth residual spreads of the last tracked frames
   tracking::ExposureEstimate exposure_;  // odometry: the colour camera's exposure, for the depth weight
   std::vector<uint8_t> moving_;  // the last tracked frame's moving regions (moving_labels())
-  std::optional<splat::RgbdFrame> moved_;  // depth_moved_frame()
+  splat::RgbdFrame moved_;       // depth_moved_frame(), where depth_moved_
+  bool depth_moved_ = false;
   int moving_factor_ = 1;
 };
 

@@ -76,7 +76,7 @@ SlamSystem::Refinement SlamSystem::refine_map(const std::function<splat::RgbdFra
       std::lock_guard lock(mutex_);
       // Its depth moved as process() moved it, and moving objects left out of the map.
       if (!frames_[i].T_colour_depth.isApprox(Eigen::Isometry3d::Identity())) {
-        loaded = splat::with_depth_at_colour_time(loaded, frames_[i].T_colour_depth);
+        splat::move_depth_to_colour_time(loaded, frames_[i].T_colour_depth);
       }
       frames_[i].moving.apply(loaded);
     }

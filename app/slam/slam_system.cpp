@@ -255,9 +255,21 @@ double measured_fraction(const splat::RgbdFrame& frame) {
   for (float z : frame.depth) measured += z > 0 && std::isfinite(z);
   return frame.depth.empty() ? 0 : static_cast<double>(measured) / static_cast<double>(frame.depth.size());
 }
+
+// A keyframe's frame for mapping: the input itself, its depth as tracking moved it to the
+// colour's instant. Taken, not copied: mapping keeps keyframes back (threaded, a backlog of
+// them), and a copy would be 4.7 MiB (640x480) of fresh memory on tracking's thread each time,
+// whose first touches made live's slowest frames (docs/measurements.md).
+splat::RgbdFrame for_mapping(splat::RgbdFrame input, const splat::RgbdFrame* synced) {
+  if (synced) {
+    input.depth.assign(synced->depth.begin(), synced->depth.end());  // into the input's own buffer
+    input.depth_time_offset = synced->depth_time_offset;
+  }
+  return input;
+}
 }  // namespace
 
-FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
+FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
   rethrow_mapping_error();
   apply_tracker_correction();
   // Depth taken apart from its colour image is moved to the colour's instant where tracking
@@ -335,7 +347,11 @@ FrameRecord SlamSystem::process(const splat::RgbdFrame& input, bool held_out) {
   {
     std::lock_guard lock(mutex_);
     if (record.keyframe) {
-      job = KeyframeJob{frame(), record.T_world_cam, keyframe_world_.size(), {}, {}};
+      job = KeyframeJob{for_mapping(std::move(input), synced),
+                        record.T_world_cam,
+                        keyframe_world_.size(),
+                        {},
+                        {}};
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
@@ -431,9 +447,10 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
   auto keyframe = [&](std::size_t number) {
     if (number >= keyframe_frame.size()) inconsistent("keyframe " + std::to_string(number) + " does not exist");
     const std::size_t i = keyframe_frame[number];
-    const splat::RgbdFrame frame = load(i);  // its depth moved as process() moved it
+    splat::RgbdFrame frame = load(i);  // its depth moved as process() moved it
     const Eigen::Isometry3d& T = s.frames[i].T_colour_depth;
-    return T.isApprox(Eigen::Isometry3d::Identity()) ? frame : splat::with_depth_at_colour_time(frame, T);
+    if (!T.isApprox(Eigen::Isometry3d::Identity())) splat::move_depth_to_colour_time(frame, T);
+    return frame;
   };
   // As mapping was given them: without the moving objects tracking found in them.
   auto mapped_keyframe = [&](std::size_t number) {

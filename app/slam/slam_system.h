@@ -80,8 +80,9 @@ class SlamSystem {
   // Tracks the frame (the first one defines the world frame and seeds the map, synchronously in
   // either mode) and maps it when it becomes a keyframe. A `held_out` frame (a test view) is
   // tracked for its pose but never maps, seeds, becomes a keyframe or joins the final sweep.
-  // Rethrows an error of the mapping thread.
-  FrameRecord process(const splat::RgbdFrame& input, bool held_out = false);
+  // Rethrows an error of the mapping thread. Takes the frame: a keyframe's goes on to mapping
+  // as it is (move it in where the caller is done with it).
+  FrameRecord process(splat::RgbdFrame input, bool held_out = false);
   // Threaded: returns once no keyframe waits or is being mapped. Rethrows a mapping error.
   void wait_for_mapping();
   // Waits for mapping, then stops the mapping thread (threaded); nothing in sequential mode.

@@ -90,11 +90,9 @@ std::vector<float> reproject_depth(const std::vector<float>& depth, const Camera
   return out;
 }
 
-RgbdFrame with_depth_at_colour_time(const RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth) {
-  RgbdFrame out = frame;
-  out.depth = reproject_depth(frame.depth, frame.camera, T_colour_depth);
-  out.depth_time_offset = 0;
-  return out;
+void move_depth_to_colour_time(RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth) {
+  frame.depth = reproject_depth(frame.depth, frame.camera, T_colour_depth);
+  frame.depth_time_offset = 0;
 }
 
 }  // namespace splat

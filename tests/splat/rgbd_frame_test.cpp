@@ -90,7 +90,7 @@ TEST(ReprojectDepth, RejectsDepthOfAnotherSize) {
                      "reproject_depth", "80x60");
 }
 
-// with_depth_at_colour_time moves only the depth, and marks it moved.
+// move_depth_to_colour_time moves only the depth, and marks it moved.
 TEST(ReprojectDepth, FrameKeepsItsColourAndLosesItsOffset) {
   splat::RgbdFrame f;
   f.camera = small_camera();
@@ -100,7 +100,8 @@ TEST(ReprojectDepth, FrameKeepsItsColourAndLosesItsOffset) {
   f.depth = plane_depth(f.camera, Eigen::Vector3d::UnitZ(), 2.0);
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(0, 0, 0.1);  // the camera 10 cm back: the wall 2.1 m away
-  const splat::RgbdFrame moved = splat::with_depth_at_colour_time(f, T);
+  splat::RgbdFrame moved = f;
+  splat::move_depth_to_colour_time(moved, T);
   EXPECT_EQ(moved.depth_time_offset, 0.0);
   EXPECT_EQ(moved.rgb, f.rgb);
   EXPECT_EQ(moved.timestamp, 3.0);

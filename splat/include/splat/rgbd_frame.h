@@ -41,9 +41,10 @@ RgbdFrame downsample(const RgbdFrame& frame, int factor);
 std::vector<float> reproject_depth(const std::vector<float>& depth, const Camera& intrinsics,
                                    const Eigen::Isometry3d& T_to_from);
 
-// The frame with its depth moved to the colour image's instant, given the camera's motion
-// over depth_time_offset: T_colour_depth = T_world_colourcam^-1 T_world_depthcam.
-RgbdFrame with_depth_at_colour_time(const RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth);
+// Moves the frame's depth to the colour image's instant, given the camera's motion over
+// depth_time_offset: T_colour_depth = T_world_colourcam^-1 T_world_depthcam. In place: only the
+// depth changes (and its offset becomes 0), so that colour is never copied for it.
+void move_depth_to_colour_time(RgbdFrame& frame, const Eigen::Isometry3d& T_colour_depth);
 
 // The frame's intrinsics with a pose.
 Camera posed(const Camera& intrinsics, const Eigen::Isometry3d& T_cam_world);
