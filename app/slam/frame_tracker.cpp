@@ -59,19 +59,15 @@ std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
     return std::make_shared<const tracking::OdometryFrame>(frame, config.odometry);
   const int factor = moving_factor(frame.width(), config);
   check_labels_fit(frame, labels, factor, "prepare_odometry_frame");
-  splat::RgbdFrame masked = frame;
-  const std::vector<uint8_t> spread =
-      upsample_labels(labels, frame.width() / factor, factor, frame.width(), frame.height());
   // Where an object left, the frame shows the static scene: only where one stands (and around
   // it) is ignored, besides what the frame ignores itself (classes its labels call dynamic).
-  if (masked.ignore.empty()) masked.ignore.assign(spread.size(), 0);
-  for (std::size_t i = 0; i < spread.size(); ++i) {
-    const uint8_t why = spread[i] == tracking::kArrived   ? tracking::kMovingSurface
-                        : spread[i] == tracking::kOutline ? tracking::kOutlineIgnored
-                                                          : 0;
-    masked.ignore[i] = std::max(masked.ignore[i], why);
+  tracking::OdometryFrame::LeftOut left_out{std::vector<uint8_t>(labels.size()), factor};
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    left_out.reasons[i] = labels[i] == tracking::kArrived   ? tracking::kMovingSurface
+                          : labels[i] == tracking::kOutline ? tracking::kOutlineIgnored
+                                                            : 0;
   }
-  return std::make_shared<const tracking::OdometryFrame>(masked, config.odometry);
+  return std::make_shared<const tracking::OdometryFrame>(frame, config.odometry, left_out);
 }
 
 std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(

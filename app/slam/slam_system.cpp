@@ -178,7 +178,9 @@ void SlamSystem::rethrow_mapping_error() {
 }
 
 void SlamSystem::with_tracking_reference(KeyframeJob& job) const {
-  if (config_.front_end != "odometry") return;
+  // Only covisibility reads it: held in mapping's backlog for nothing, the 2.4 MiB of each
+  // keyframe's pyramid were fresh memory for tracking's next frames (docs/measurements.md).
+  if (config_.front_end != "odometry" || config_.loop_closure.covisible_keyframes <= 0) return;
   job.prepared = tracker_.newest_reference();
   job.odometry = tracker_.odometry_config();
 }

@@ -181,12 +181,13 @@ class SlamSystem {
     splat::RgbdFrame frame;
     Eigen::Isometry3d T_world_cam;
     std::size_t keyframe;  // its number among the system's keyframes
-    // Odometry: the keyframe as tracking prepared it (numbered as `keyframe`: it is tracking's newest
-    // reference), and tracking's settings then (covisibility).
+    // Odometry with covisibility: the keyframe as tracking prepared it (numbered as `keyframe`: it
+    // is tracking's newest reference), and tracking's settings then; empty otherwise.
     FrameTracker::PreparedKeyframe prepared;
     tracking::OdometryConfig odometry;
   };
-  // Odometry: gives the job tracking's newest reference (the job's keyframe) and its settings.
+  // Odometry with covisibility: gives the job tracking's newest reference (the job's keyframe) and
+  // its settings.
   void with_tracking_reference(KeyframeJob& job) const;
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);

@@ -2,12 +2,13 @@
 // teddy frames against ground truth, and failures reported for what cannot be aligned.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "evaluation/trajectory_errors.h"
 #include "datasets/dataset.h"
 #include "datasets/synthetic_sequence.h"
+#include "evaluation/trajectory_errors.h"
 #include "splat/error.h"
 #include "splat/se3.h"
 #include "support/synthetic_dataset.h"
@@ -244,6 +245,60 @@ TEST(RgbdOdometry, DepthSpreadIgnoresAnOccluderInFrontOfTheScene) {
   EXPECT_GT(clear.depth_spread, 0.3) << "the generated noise shows";
   EXPECT_LT(r.depth_spread, 1.3 * clear.depth_spread) << "the person barely moves the spread";
   EXPECT_GT(r.depth_scale, 5 * r.depth_spread) << "the t-distribution's scale, for contrast";
+}
+
+// Pixels left out apart from the frame (moving regions at a coarser scale) prepare the same
+// pyramid as the frame copied with them in its own ignore mask, which they replaced: each block
+// covers factor x factor pixels, the last row and column also the remainder.
+TEST(RgbdOdometry, PixelsLeftOutApartPrepareTheFrameMaskedWithThem) {
+  gslam::test::TempDir dir;
+  const app::Dataset d = synthetic(dir, 1);
+  splat::RgbdFrame frame = d.load(0);
+  const int w = frame.width(), h = frame.height();
+  frame.ignore.assign(static_cast<std::size_t>(w) * h, 0);
+  for (int x = 0; x < w; ++x)
+    frame.ignore[static_cast<std::size_t>(h / 3) * w + x] = 1;  // a row the frame ignores
+  for (const int factor : {4, 7}) {  // 7 leaves a remainder at the synthetic frame's sizes
+    ASSERT_NE(w % 7 + h % 7, 0);
+    tracking::OdometryFrame::LeftOut left_out{{}, factor};
+    const int bw = w / factor, bh = h / factor;
+    for (int by = 0; by < bh; ++by) {
+      for (int bx = 0; bx < bw; ++bx) {
+        // A region of surfaces, its outline, and the last column of blocks (over the remainder).
+        const bool inside = bx > bw / 4 && bx < bw / 2 && by > bh / 4 && by < bh / 2;
+        const bool outline = bx >= bw / 4 && bx <= bw / 2 && by >= bh / 4 && by <= bh / 2;
+        left_out.reasons.push_back(inside ? 2 : outline || bx == bw - 1 ? 1 : 0);
+      }
+    }
+    splat::RgbdFrame masked = frame;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const std::size_t block = static_cast<std::size_t>(std::min(y / factor, bh - 1)) * bw +
+                                  std::min(x / factor, bw - 1);
+        uint8_t& ignored = masked.ignore[static_cast<std::size_t>(y) * w + x];
+        ignored = std::max(ignored, left_out.reasons[block]);
+      }
+    }
+    const tracking::OdometryConfig config;
+    const tracking::OdometryFrame apart(frame, config, left_out), copied(masked, config);
+    ASSERT_EQ(apart.levels().size(), copied.levels().size());
+    for (std::size_t level = 0; level < apart.levels().size(); ++level) {
+      const tracking::OdometryFrame::Level &a = apart.levels()[level], &b = copied.levels()[level];
+      EXPECT_EQ(a.ignore, b.ignore) << "factor " << factor << ", level " << level;
+      EXPECT_EQ(a.points, b.points) << "factor " << factor << ", level " << level;
+      EXPECT_GT(std::count(a.ignore.begin(), a.ignore.end(), 2), 0)
+          << "the region reaches level " << level;
+    }
+  }
+  const tracking::OdometryFrame::LeftOut wrong{std::vector<uint8_t>(10, 1), 4};
+  try {
+    const tracking::OdometryFrame refused(frame, tracking::OdometryConfig{}, wrong);
+    ADD_FAILURE() << "accepted";
+  } catch (const splat::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("10 pixels left out at factor 4 do not fit a"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A frame of another part of the room shares too little with the reference: reported, not a

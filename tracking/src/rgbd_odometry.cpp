@@ -280,12 +280,53 @@ std::vector<int> OdometryFrame::factors(int width, const OdometryConfig& config)
   return out;
 }
 
-OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config) : timestamp_(frame.timestamp) {
+namespace {
+
+// Adds `left_out` to the ignore mask of `scaled`, the frame downsampled by `factor`: each pixel
+// takes the largest reason of the blocks its factor x factor pixels fall in, as downsampling the
+// frame with them in its own mask would give.
+void add_left_out(splat::RgbdFrame& scaled, const OdometryFrame::LeftOut& left_out, int factor,
+                  int frame_width, int frame_height) {
+  const int blocks_width = frame_width / left_out.factor,
+            blocks_height = frame_height / left_out.factor;
+  if (scaled.ignore.empty())
+    scaled.ignore.assign(static_cast<std::size_t>(scaled.width()) * scaled.height(), 0);
+  for (int y = 0; y < scaled.height(); ++y) {
+    const int by0 = std::min(y * factor / left_out.factor, blocks_height - 1);
+    const int by1 = std::min((y * factor + factor - 1) / left_out.factor, blocks_height - 1);
+    for (int x = 0; x < scaled.width(); ++x) {
+      const int bx0 = std::min(x * factor / left_out.factor, blocks_width - 1);
+      const int bx1 = std::min((x * factor + factor - 1) / left_out.factor, blocks_width - 1);
+      uint8_t& ignored = scaled.ignore[static_cast<std::size_t>(y) * scaled.width() + x];
+      for (int by = by0; by <= by1; ++by) {
+        for (int bx = bx0; bx <= bx1; ++bx)
+          ignored =
+              std::max(ignored, left_out.reasons[static_cast<std::size_t>(by) * blocks_width + bx]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config,
+                             const LeftOut& left_out)
+    : timestamp_(frame.timestamp) {
   config.validate();
   const std::size_t pixels = static_cast<std::size_t>(frame.width()) * frame.height();
   if (frame.rgb.size() != pixels * 3 || frame.depth.size() != pixels || (!frame.ignore.empty() && frame.ignore.size() != pixels)) {
     throw splat::Error("OdometryFrame: frame images do not match its " + std::to_string(frame.width()) + "x" +
                        std::to_string(frame.height()) + " camera");
+  }
+  if (!left_out.reasons.empty() &&
+      (left_out.factor < 1 || frame.width() / left_out.factor < 1 ||
+       frame.height() / left_out.factor < 1 ||
+       left_out.reasons.size() != static_cast<std::size_t>(frame.width() / left_out.factor) *
+                                      static_cast<std::size_t>(frame.height() / left_out.factor))) {
+    throw splat::Error("OdometryFrame: " + std::to_string(left_out.reasons.size()) +
+                       " pixels left out at factor " + std::to_string(left_out.factor) +
+                       " do not fit a " + std::to_string(frame.width()) + "x" +
+                       std::to_string(frame.height()) + " frame");
   }
   // Each level from the previous one where the factors allow (box averages of box averages).
   splat::RgbdFrame scaled;
@@ -300,6 +341,8 @@ OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig
       scaled = splat::downsample(frame, factor);
     }
     scaled_factor = factor;
+    if (!left_out.reasons.empty())
+      add_left_out(scaled, left_out, factor, frame.width(), frame.height());
     Level l;
     l.width = scaled.width();
     l.height = scaled.height();
@@ -325,6 +368,9 @@ OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig
   }
   levels_.assign(std::make_move_iterator(finest_first.rbegin()), std::make_move_iterator(finest_first.rend()));
 }
+
+OdometryFrame::OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config)
+    : OdometryFrame(frame, config, LeftOut{}) {}
 
 double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame& current, double current_rate,
                                double reference_rate) {

@@ -64,7 +64,17 @@ struct OdometryConfig {
 // A frame prepared for alignment: per pyramid level its intensity, depth and their gradients.
 class OdometryFrame {
  public:
-  // Throws splat::Error if the frame's images do not match its camera.
+  // Pixels left out besides the frame's own ignore mask: `reasons` (splat::RgbdFrame::ignore's
+  // values, 0 for none), one per `factor` x `factor` block of the frame (blocks of the last row
+  // and column also cover the remainder), or empty. Taken apart from the frame so that masking
+  // it needs no copy of its images.
+  struct LeftOut {
+    std::vector<uint8_t> reasons;
+    int factor = 1;
+  };
+  // Throws splat::Error if the frame's images, or `left_out`, do not match its camera.
+  OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config,
+                const LeftOut& left_out);
   OdometryFrame(const splat::RgbdFrame& frame, const OdometryConfig& config);
   struct Level {
     int width = 0, height = 0;
