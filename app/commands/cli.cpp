@@ -64,11 +64,15 @@ void add_topic_options(CLI::App& cmd, DatasetOptions& o) {
                  "ROS recording: ground truth from /tf, PARENT,CHILD (e.g. world,kinect; default: groundtruth.txt beside it)");
 }
 
-// Label images from a segmenter (datasets/label_images.h).
+// Label images from a segmenter (datasets/label_images.h), and the colour camera
+// (datasets/color_registration.h): both belong to the colour images.
 void add_label_option(CLI::App& cmd, DatasetOptions& o) {
   cmd.add_option("--labels", o.labels,
                  "Folder of label images (NAME.png per colour frame, class ids) with classes.json; default: labels/ "
                  "beside the colour folder when it has classes.json");
+  cmd.add_option("--color-camera", o.color_camera,
+                 "Colour not registered to depth: the colour camera's fx,fy,cx,cy, 'registered', or 'auto' (default: "
+                 "found from where colour edges meet depth edges, applied only where that clearly beats registered)");
 }
 
 // The options benchmark and batch share: the settings of every run, and where the runs go.
@@ -319,6 +323,10 @@ int run_cli(int argc, char** argv) {
       ->check(CLI::Range(0.0, 2.0));
   gen_cmd->add_option("--focal-error", seq.focal_error, "intrinsics.txt's focal length off by this fraction")
       ->check(CLI::Range(-0.5, 0.5));
+  gen_cmd
+      ->add_option("--color-focal-ratio", seq.color_focal_ratio,
+                   "Colour not registered to depth: the colour camera's focal length over the depth camera's")
+      ->check(CLI::Range(0.5, 2.0));
   gen_cmd->add_option(
       "--distortion", gen.distortion,
       "k1,k2,p1,p2[,k3]: the images seen through a lens with this distortion (OpenCV's "

@@ -75,6 +75,7 @@ int run_eval(const EvalOptions& o) {
   if (options.intrinsics.empty()) options.intrinsics = recorded.options.intrinsics;
   if (!(options.depth_scale > 0)) options.depth_scale = recorded.options.depth_scale;
   if (options.max_frames == 0) options.max_frames = recorded.options.max_frames;
+  if (options.color_camera.empty()) options.color_camera = recorded.options.color_camera;  // the map's colour
   if (o.dataset.empty()) {  // a recording's topics and /tf frames, as the run read it
     if (options.color_topic.empty()) options.color_topic = recorded.options.color_topic;
     if (options.depth_topic.empty()) options.depth_topic = recorded.options.depth_topic;

@@ -81,6 +81,7 @@ int run_reconstruct(const ReconstructOptions& o) {
                dataset.frames_used().c_str(), dataset.intrinsics.width, dataset.intrinsics.height,
                dataset.has_ground_truth() ? ", with ground truth" : "");
   for (const std::string& w : dataset.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (const std::string color = dataset.color_note(); !color.empty()) std::fprintf(stderr, "%s\n", color.c_str());
 
   std::string note;
   auto rasterizer = make_rasterizer(o.backend, note);

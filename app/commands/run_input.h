@@ -21,7 +21,9 @@ nlohmann::json run_input_json(const std::filesystem::path& input, const std::str
 // A distorting lens: the raw camera and its distortion ("lens": fx, fy, cx, cy, k1, k2, p1, p2,
 // k3), from which the frames were undistorted into "intrinsics".
 nlohmann::json lens_json(const Undistortion& undistortion);
-// With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames").
+// With a ROS recording's topics and --gt-frames ("color_topic", "depth_topic", "gt_frames"), and
+// the colour camera the frames were registered with ("color_camera": fx,fy,cx,cy or registered),
+// so that eval and --resume load the same colour without estimating it again.
 inline nlohmann::json run_input_json(const std::filesystem::path& input, const Dataset& dataset, int max_frames,
                                      int test_every, const SlamConfig& config) {
   nlohmann::json out =
@@ -30,6 +32,7 @@ inline nlohmann::json run_input_json(const std::filesystem::path& input, const D
   if (!dataset.depth_topic.empty()) out["depth_topic"] = dataset.depth_topic;
   if (!dataset.gt_frames.empty()) out["gt_frames"] = dataset.gt_frames;
   if (dataset.undistortion) out["lens"] = lens_json(*dataset.undistortion);
+  out["color_camera"] = dataset.color_registration ? dataset.color_registration->color_camera().text() : "registered";
   return out;
 }
 

@@ -35,7 +35,8 @@ double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   const Dataset d = open_dataset(s.path, options);
   // The frames as read: a camera or lens read differently (a newer gslam) makes another baseline.
   const std::string camera =
-      intrinsics_text(d.undistortion ? d.undistortion->raw_camera() : d.intrinsics, d.distortion);
+      intrinsics_text(d.undistortion ? d.undistortion->raw_camera() : d.intrinsics, d.distortion) + "; colour " +
+      (d.color_registration ? d.color_registration->color_camera().text() : std::string("registered"));
   const nlohmann::json kept = read_json_or_null(record);
   if (kept.is_object() && kept.value("dataset", "") == dataset &&
       kept.value("camera", "") == camera && kept.value("max_frames", -1) == o.max_frames &&

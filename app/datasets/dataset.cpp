@@ -389,6 +389,17 @@ std::string Dataset::frames_used() const {
   return used + " used (of " + std::to_string(listed) + " listed; " + unused_frames(*this) + ")";
 }
 
+std::string Dataset::color_note() const {
+  if (!color_registration) return "";
+  std::string note = "colour resampled into the depth camera from the colour camera " +
+                     color_registration->color_camera().text();
+  if (!color_estimate) return note + " (--color-camera)";
+  char found[160];
+  std::snprintf(found, sizeof(found), " (not registered to depth: found on %zu depth-edge pixels, edge score %.2fx registered's)",
+                color_estimate->edge_points, color_estimate->gain);
+  return note + found;
+}
+
 bool Dataset::has_ground_truth() const {
   return std::any_of(entries.begin(), entries.end(), [](const DatasetEntry& e) { return e.T_world_cam_truth.has_value(); });
 }
@@ -400,6 +411,7 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
     f.timestamp = e.timestamp;
     f.depth_time_offset = e.depth_offset;
     if (undistortion) undistortion->apply(f);
+    if (color_registration) color_registration->apply(f);
     return f;
   }
   const splat::Image8 rgb = read_rgb8(e.rgb);
@@ -431,6 +443,7 @@ splat::RgbdFrame Dataset::load(std::size_t i) const {
     }
   }
   if (undistortion) undistortion->apply(f);
+  if (color_registration) color_registration->apply(f);
   return f;
 }
 
@@ -515,6 +528,25 @@ void set_camera(Dataset& d, const std::string& intrinsics, const std::filesystem
   set_lens_distortion(d, distortion, "intrinsics '" + intrinsics + "'");
 }
 
+void set_color_camera(Dataset& d, const ColorCameraChoice& choice) {
+  d.color_registration.reset();
+  d.color_estimate.reset();
+  if (choice.kind == ColorCameraChoice::kRegistered) return;
+  if (choice.kind == ColorCameraChoice::kGiven) {
+    d.color_registration = std::make_shared<const ColorResampler>(d.intrinsics, choice.given);
+    return;
+  }
+  // Frames spread over the sequence, as they load (undistorted).
+  constexpr std::size_t kFrames = 8;
+  std::vector<splat::RgbdFrame> frames;
+  const std::size_t n = d.entries.size(), count = std::min(n, kFrames);
+  for (std::size_t k = 0; k < count; ++k) frames.push_back(d.load(k * n / count));
+  d.color_estimate = estimate_color_camera(frames);
+  if (d.color_estimate->register_color) {
+    d.color_registration = std::make_shared<const ColorResampler>(d.intrinsics, d.color_estimate->camera);
+  }
+}
+
 Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& options) {
   const bool recording = is_bag_file(root);
   if (recording && !std::filesystem::is_regular_file(root)) fail(root, "recording does not exist");
@@ -560,6 +592,7 @@ Dataset open_dataset(const std::filesystem::path& root, const DatasetOptions& op
   }
   if (!d.store) set_size_from(d.intrinsics, d.entries.front().rgb);
   set_lens_distortion(d, d.distortion, d.camera_source.empty() ? root.string() : d.camera_source);
+  set_color_camera(d, parse_color_camera(options.color_camera));
   // Label images: named, or labels/ beside the colour folder.
   if (d.store && !options.labels.empty()) fail(options.labels, "label images are read for dataset folders, not recordings");
   if (!options.labels.empty()) {

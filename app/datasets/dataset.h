@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "datasets/color_registration.h"
 #include "datasets/label_images.h"
 #include "datasets/lens_distortion.h"
 #include "splat/rgbd_frame.h"
@@ -24,6 +25,9 @@ struct DatasetOptions {
   // Label images (datasets/label_images.h); empty: labels/ beside the colour folder, if it holds
   // classes.json.
   std::filesystem::path labels;
+  // The colour camera (datasets/color_registration.h): "auto" (estimated; also when empty),
+  // "registered", or its "fx,fy,cx,cy".
+  std::string color_camera;
 };
 
 struct DatasetEntry {
@@ -55,6 +59,10 @@ struct Dataset {
   std::string camera_source;  // where the camera came from ("DIR/intrinsics.txt", "--intrinsics",
                               // ...), for errors
   std::shared_ptr<const Undistortion> undistortion;
+  // Colour not registered to depth: resampled into `intrinsics`' pixels after undistortion;
+  // null where colour is registered (given, or the estimate did not clearly beat it).
+  std::shared_ptr<const ColorResampler> color_registration;
+  std::optional<ColorCameraEstimate> color_estimate;  // when "auto" estimated it
   double depth_scale = 5000;
   std::vector<DatasetEntry> entries;  // in a recording, rgb and depth both name the file
   std::shared_ptr<const FrameStore> store;  // set for recordings: their frames' pixels
@@ -78,6 +86,9 @@ struct Dataset {
   // "193 frames used (of 2406 listed; 2206 have no colour image here, 7 no depth within 0.02 s)",
   // or "193 frames" when every listed frame is used.
   std::string frames_used() const;
+  // "colour resampled from the colour camera fx,fy,cx,cy (...)" where colour is registered here,
+  // else empty.
+  std::string color_note() const;
 
   // Reads entry i (colour /255, depth / depth_scale), from its files or from `store`, with its
   // label image where there is one (pixels of dynamic classes ignored). Throws
@@ -98,6 +109,10 @@ void set_lens_distortion(Dataset& d, const LensDistortion& distortion, const std
 LensDistortion read_intrinsics_file(splat::Camera& camera, const std::filesystem::path& path);
 // The camera and distortion as --intrinsics takes them, "fx,fy,cx,cy[,k1,k2,p1,p2,k3]", exactly.
 std::string intrinsics_text(const splat::Camera& camera, const LensDistortion& distortion);
+// d.color_registration as `choice` asks: none (registered), the given colour camera, or the one
+// estimate_color_camera() finds on up to 8 frames spread over d (d.color_estimate). Call after the
+// camera and lens are set.
+void set_color_camera(Dataset& d, const ColorCameraChoice& choice);
 // d's camera from "fx,fy,cx,cy[,k1,k2,p1,p2[,k3]]", sized as the colour image `rgb`. Throws
 // splat::Error naming the text or the file.
 void set_camera(Dataset& d, const std::string& intrinsics, const std::filesystem::path& rgb);

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "datasets/remap_plane.h"
 #include "splat/error.h"
 
 namespace app {
@@ -89,15 +90,6 @@ cv::Matx33d opencv_matrix(const splat::Camera& c) {
   return {c.fx, 0, c.cx - 0.5, 0, c.fy, c.cy - 0.5, 0, 0, 1};
 }
 
-template <typename T>
-void remap_plane(std::vector<T>& data, int width, int height, int type, int channels,
-                 const cv::Mat& map_x, const cv::Mat& map_y, int interpolation) {
-  if (data.empty()) return;
-  const cv::Mat in(height, width, CV_MAKETYPE(type, channels), data.data());
-  cv::Mat out;
-  cv::remap(in, out, map_x, map_y, interpolation, cv::BORDER_REPLICATE);
-  std::copy(out.ptr<T>(), out.ptr<T>() + data.size(), data.begin());
-}
 
 // Whether the lens maps radii monotonically out to `reach` (normalized, distorted): past its peak
 // a radial polynomial shows points nearer the axis again.

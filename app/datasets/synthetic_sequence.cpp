@@ -319,18 +319,17 @@ SyntheticOptions SyntheticOptions::hard_motion() {
 
 namespace {
 
-// Each pixel's viewing direction (x / z, y / z) through the lens, at its 4 colour supersamples and
-// then its centre (sample 4).
-std::vector<Eigen::Vector2d> lens_directions(const SyntheticOptions& o, double cx, double cy) {
+// Each pixel's viewing direction (x / z, y / z) through the lens of focal length `focal`, at its 4
+// colour supersamples and then its centre (sample 4).
+std::vector<Eigen::Vector2d> lens_directions(const SyntheticOptions& o, double focal, double cx, double cy) {
   std::vector<Eigen::Vector2d> at;
   at.reserve(static_cast<std::size_t>(o.width) * o.height * 5);
   for (int y = 0; y < o.height; ++y) {
     for (int x = 0; x < o.width; ++x) {
       for (int s = 0; s < 4; ++s) {
-        at.emplace_back((x + 0.25 + 0.5 * (s % 2) - cx) / o.focal,
-                        (y + 0.25 + 0.5 * (s / 2) - cy) / o.focal);
+        at.emplace_back((x + 0.25 + 0.5 * (s % 2) - cx) / focal, (y + 0.25 + 0.5 * (s / 2) - cy) / focal);
       }
-      at.emplace_back((x + 0.5 - cx) / o.focal, (y + 0.5 - cy) / o.focal);
+      at.emplace_back((x + 0.5 - cx) / focal, (y + 0.5 - cy) / focal);
     }
   }
   return o.distortion.any() ? undistort_normalized(o.distortion, at) : at;
@@ -348,10 +347,12 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) ||
       !(o.depth_holes >= 0 && o.depth_holes < 1) || !(o.shake_peak_rate >= 0) || !(o.fps > 0) ||
       !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps) ||
-      !(o.gain_swing >= 0 && o.gain_swing <= 2)) {
+      !(o.gain_swing >= 0 && o.gain_swing <= 2) || !(o.color_focal_ratio >= 0.5 && o.color_focal_ratio <= 2) ||
+      !o.color_centre_shift.allFinite()) {
     throw splat::Error(
         "synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake "
-        "and holes below 1, depth lag under half a frame, gain swing in [0, 2] expected");
+        "and holes below 1, depth lag under half a frame, gain swing in [0, 2], colour focal ratio in [0.5, 2] "
+        "expected");
   }
   if (o.distortion
           .any()) {  // a lens that folds the image over is refused before anything is written
@@ -371,9 +372,19 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   std::vector<StampedPose> truth;
   std::string rgb_list = "# color images\n# timestamp filename\n", depth_list = "# depth maps\n# timestamp filename\n";
   const double cx = o.width / 2.0, cy = o.height / 2.0;
-  const std::vector<Eigen::Vector2d> lens = lens_directions(o, cx, cy);
+  const std::vector<Eigen::Vector2d> lens = lens_directions(o, o.focal, cx, cy);
+  const bool unregistered = o.color_focal_ratio != 1 || !o.color_centre_shift.isZero();
+  const std::vector<Eigen::Vector2d> color_lens =
+      unregistered ? lens_directions(o, o.focal * o.color_focal_ratio, cx + o.color_centre_shift.x(),
+                                     cy + o.color_centre_shift.y())
+                   : std::vector<Eigen::Vector2d>{};
   const auto direction = [&](int x, int y, int sample) {
     const Eigen::Vector2d& n = lens[(static_cast<std::size_t>(y) * o.width + x) * 5 + sample];
+    return Vector3d(n.x(), n.y(), 1.0);
+  };
+  const auto color_direction = [&](int x, int y, int sample) {
+    if (!unregistered) return direction(x, y, sample);
+    const Eigen::Vector2d& n = color_lens[(static_cast<std::size_t>(y) * o.width + x) * 5 + sample];
     return Vector3d(n.x(), n.y(), 1.0);
   };
   for (int f = 0; f < o.frames; ++f) {
@@ -397,7 +408,7 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
         const double weight = 0.25 / static_cast<double>(instants.size());
         for (const auto& [at, at_seconds] : instants) {
           for (int s = 0; s < 4; ++s) {
-            const Vector3d dir_cam = direction(x, y, s);
+            const Vector3d dir_cam = color_direction(x, y, s);
             Hit hit;
             trace(scene, o, at.translation(), (at.linear() * dir_cam).normalized(), at_seconds, hit);
             if (std::isfinite(hit.t)) color += weight * hit.color * (0.55 + 0.45 * std::max(0.0, hit.normal.dot(-light)));

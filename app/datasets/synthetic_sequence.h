@@ -20,6 +20,11 @@ struct SyntheticOptions {
   // A lens that distorts (TUM's fr1 and fr2 Kinects): the images are seen through it, and
   // intrinsics.txt states it after the focal length and principal point.
   LensDistortion distortion;
+  // Colour not registered to depth (7-Scenes, raw Kinect streams): the colour images are taken
+  // from the depth camera's place through a focal length color_focal_ratio times the depth's and a
+  // principal point shifted by color_centre_shift pixels; intrinsics.txt states the depth camera.
+  double color_focal_ratio = 1;
+  Eigen::Vector2d color_centre_shift = Eigen::Vector2d::Zero();
   double fps = 30;
   // 0: an arc through the room. N > 0: N laps of a circle about the room's middle, looking across
   // it, so the camera returns to where it began (loop closure's test).

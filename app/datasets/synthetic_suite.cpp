@@ -42,6 +42,17 @@ std::vector<SyntheticCase> hard_case_suite() {
       o);
 
   o = SyntheticOptions{};
+  o.frames = 200;
+  o.shake_peak_rate = 1.0;
+  o.depth_noise = 0.0015;
+  o.color_focal_ratio = 0.9;
+  o.color_centre_shift = {-4, 1};
+  add("unregistered_color",
+      "200 frames, 1 rad/s, Kinect noise, colour through a focal length 0.9x depth's and a principal point "
+      "4 px off (7-Scenes' raw colour)",
+      o);
+
+  o = SyntheticOptions{};
   o.frames = 300;
   o.laps = 1;
   o.focal_error = 0.01;

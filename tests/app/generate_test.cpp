@@ -91,7 +91,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
   std::set<std::string> names;
   bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
        long_one = false, moving = false, walking = false, unsynced = false, exposure = false,
-       lens = false;
+       lens = false, unregistered = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -105,9 +105,10 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     unsynced |= c.options.depth_lag > 0;
     exposure |= c.options.gain_swing > 0;
     lens |= c.options.distortion.any();
+    unregistered |= c.options.color_focal_ratio != 1;
   }
   EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && walking &&
-              unsynced && exposure && lens);
+              unsynced && exposure && lens && unregistered);
 }
 
 }  // namespace
