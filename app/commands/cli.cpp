@@ -389,6 +389,8 @@ int run_cli(int argc, char** argv) {
     if (live.dataset_options.max_frames < 0) throw splat::Error("--max-frames must be >= 0");
     if (!live.dataset_options.intrinsics.empty()) live.watch_options.intrinsics = live.dataset_options.intrinsics;
     if (live.dataset_options.depth_scale > 0) live.watch_options.depth_scale = live.dataset_options.depth_scale;
+    parse_color_camera(live.dataset_options.color_camera);  // a bad value fails before any frame
+    live.watch_options.color_camera = live.dataset_options.color_camera;
     return run_live(live);
   }
   return 2;

@@ -238,6 +238,8 @@ class WatchSource final : public ThreadedSource {
         if (dataset_.entries.empty()) {
           std::lock_guard lock(intrinsics_mutex_);
           set_camera(dataset_, options_.intrinsics, entry.rgb);
+          const ColorCameraChoice color = parse_color_camera(options_.color_camera);
+          if (color.kind == ColorCameraChoice::kGiven) set_color_camera(dataset_, color);
         }
         dataset_.entries = {entry};
         mailbox_.put({dataset_.load(0), Clock::now(), std::nullopt});

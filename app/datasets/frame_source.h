@@ -48,6 +48,9 @@ struct WatchOptions {
   // "fx,fy,cx,cy[,k1,k2,p1,p2,k3]"; empty: DIR/intrinsics.txt ("fx fy cx cy [k1 k2 p1 p2 k3]")
   std::string intrinsics;
   double depth_scale = 5000;  // stored value per metre
+  // The colour camera where colour is not registered to depth, "fx,fy,cx,cy" (--color-camera);
+  // anything else loads colour as it is: a stream has no frames yet to estimate it from.
+  std::string color_camera;
   double idle_timeout = 10;   // seconds without a new frame before the stream counts as ended
   bool every_frame = false;   // each frame waits until the previous one is taken: none dropped
 };
