@@ -106,7 +106,7 @@ struct EdgeFrame {
 
 // A depth discontinuity: the right or lower neighbour's depth differs by more than this fraction.
 constexpr float kDepthJump = 0.05f;
-constexpr std::size_t kMaxEdgesPerFrame = 1500;
+constexpr std::size_t kMaxEdgesPerFrame = 1000;
 
 EdgeFrame edge_frame(const splat::RgbdFrame& f, double unit) {
   EdgeFrame e;
@@ -152,15 +152,17 @@ float bilinear(const cv::Mat& m, double x, double y) {
   return (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
 }
 
-// Mean gradient over every edge point (an edge mapped outside the colour image scores 0).
+// Mean gradient over the edge points (an edge mapped outside the colour image scores 0): every
+// point on the narrow blur, every kCoarseStride-th on the wide one, where the grid is largest.
+constexpr std::size_t kCoarseStride = 4;
 double edge_score(const std::vector<EdgeFrame>& frames, bool fine, const splat::Camera& depth, const ColorCamera& c) {
   const ColorMap m(depth, c);
+  const std::size_t stride = fine ? 1 : kCoarseStride;
   double sum = 0;
   std::size_t n = 0;
   for (const EdgeFrame& e : frames) {
     const cv::Mat& g = fine ? e.fine : e.coarse;
-    for (std::size_t k = 0; k < e.u.size(); ++k) sum += bilinear(g, m.x(e.u[k]), m.y(e.v[k]));
-    n += e.u.size();
+    for (std::size_t k = 0; k < e.u.size(); k += stride, ++n) sum += bilinear(g, m.x(e.u[k]), m.y(e.v[k]));
   }
   return n ? sum / static_cast<double>(n) : 0.0;
 }
@@ -204,11 +206,11 @@ ColorCameraEstimate estimate_color_camera(std::span<const splat::RgbdFrame> fram
   if (out.edge_points < ColorCameraEstimate::kMinEdgePoints) return out;
   const ColorCamera registered = out.camera;
   // Ratios 0.8-1.25 in 0.01 steps, shifts +-20 px in 2 px steps, on the wide blur; then
-  // +-0.015 / +-3 px and +-0.003 / +-0.6 px on the narrow one.
+  // +-0.015 / +-3 px and +-0.004 / +-0.8 px in quarters on the narrow one.
   const ColorCamera middle{1.025 * depth.fx, 1.025 * depth.fy, depth.cx, depth.cy};
   ColorCamera found = search(edges, false, depth, middle, 0.22, 22, 20 * unit, 10);
-  found = search(edges, true, depth, found, 0.015, 6, 3 * unit, 6);
-  found = search(edges, true, depth, found, 0.003, 6, 0.6 * unit, 6);
+  found = search(edges, true, depth, found, 0.015, 4, 3 * unit, 4);
+  found = search(edges, true, depth, found, 0.004, 4, 0.8 * unit, 4);
   const double registered_score = edge_score(edges, true, depth, registered);
   out.gain = registered_score > 0 ? edge_score(edges, true, depth, found) / registered_score : 1.0;
   if (out.gain >= ColorCameraEstimate::kMinGain) {
