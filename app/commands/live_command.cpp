@@ -317,7 +317,7 @@ int run_live(const LiveOptions& o, const SlamConfig& config, LiveHost* host) {
     if (source->undistortion())
       outputs->extra()["input"]["lens"] = lens_json(*source->undistortion());
     const ColorCameraChoice color = parse_color_camera(o.watch_options.color_camera);
-    outputs->extra()["input"]["color_camera"] = color.kind == ColorCameraChoice::kGiven ? color.given.text() : "registered";
+    outputs->extra()["input"]["color_camera"] = color.kind == ColorCameraChoice::kGiven ? color.given.text() : kRegisteredColor;
   }
   outputs->extra()["live"] = {{"source", source->describe()},
                              {"frames_received", source->delivered() + source->dropped()},

@@ -47,7 +47,7 @@ RecordedInput recorded_input(const nlohmann::json& in, const std::string& where)
     r.options.color_topic = in.value("color_topic", "");
     r.options.depth_topic = in.value("depth_topic", "");
     r.options.gt_frames = in.value("gt_frames", "");
-    r.options.color_camera = in.value("color_camera", "registered");  // runs before registration had none
+    r.options.color_camera = in.value("color_camera", kRegisteredColor);  // runs before registration had none
     r.config = in.value("config", nlohmann::json());
     r.test_every = in.value("test_every", 0);
     if (r.test_every < 0) throw splat::Error(where + ": \"input\".test_every is negative");

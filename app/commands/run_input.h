@@ -32,7 +32,7 @@ inline nlohmann::json run_input_json(const std::filesystem::path& input, const D
   if (!dataset.depth_topic.empty()) out["depth_topic"] = dataset.depth_topic;
   if (!dataset.gt_frames.empty()) out["gt_frames"] = dataset.gt_frames;
   if (dataset.undistortion) out["lens"] = lens_json(*dataset.undistortion);
-  out["color_camera"] = dataset.color_registration ? dataset.color_registration->color_camera().text() : "registered";
+  out["color_camera"] = ColorResampler::record(dataset.color_registration.get());
   return out;
 }
 

@@ -36,7 +36,7 @@ double baseline_ate_cm(const FoundSequence& s, const BenchmarkOptions& o) {
   // The frames as read: a camera or lens read differently (a newer gslam) makes another baseline.
   const std::string camera =
       intrinsics_text(d.undistortion ? d.undistortion->raw_camera() : d.intrinsics, d.distortion) + "; colour " +
-      (d.color_registration ? d.color_registration->color_camera().text() : std::string("registered"));
+      ColorResampler::record(d.color_registration.get());
   const nlohmann::json kept = read_json_or_null(record);
   if (kept.is_object() && kept.value("dataset", "") == dataset &&
       kept.value("camera", "") == camera && kept.value("max_frames", -1) == o.max_frames &&

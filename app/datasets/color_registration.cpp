@@ -22,7 +22,7 @@ std::string ColorCamera::text() const {
 ColorCameraChoice parse_color_camera(const std::string& text) {
   ColorCameraChoice choice;
   if (text.empty() || text == "auto") return choice;
-  if (text == "registered") {
+  if (text == kRegisteredColor) {
     choice.kind = ColorCameraChoice::kRegistered;
     return choice;
   }

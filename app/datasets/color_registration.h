@@ -31,6 +31,7 @@ struct ColorCameraChoice {
   ColorCamera given;
 };
 ColorCameraChoice parse_color_camera(const std::string& text);
+inline constexpr const char* kRegisteredColor = "registered";
 
 // Resamples colour images of `color` into `depth`'s pixels (bilinear); a pixel whose ray falls
 // outside the colour image has no colour and is marked ignored (splat::RgbdFrame::ignore = 1),
@@ -39,6 +40,11 @@ class ColorResampler {
  public:
   ColorResampler(const splat::Camera& depth, const ColorCamera& color);
   const ColorCamera& color_camera() const { return color_; }
+  // What a run records ("input"."color_camera"): the colour camera's text, or kRegisteredColor
+  // without a resampler.
+  static std::string record(const ColorResampler* resampler) {
+    return resampler ? resampler->color_.text() : kRegisteredColor;
+  }
   // Throws splat::Error when the frame is not the depth camera's size.
   void apply(splat::RgbdFrame& frame) const;
 
