@@ -182,7 +182,8 @@ BackEnd::Linked BackEnd::link_covisible(const FrameTracker::PreparedKeyframe& ke
   std::vector<tracking::PoseGraphEdge> edges;
   {
     std::lock_guard lock(graph_mutex_);
-    edges = edges_;
+    std::copy_if(edges_.begin(), edges_.end(), std::back_inserter(edges),
+                 [&](const tracking::PoseGraphEdge& e) { return e.i < poses.size() && e.j < poses.size(); });
   }
   const tracking::PoseGraphConfig& graph = config_.loop_closure.graph;
   std::vector<tracking::PoseGraphEdge> added;

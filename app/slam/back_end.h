@@ -56,10 +56,11 @@ class BackEnd {
   std::optional<Loop> close_loop(const splat::RgbdFrame& frame, std::size_t keyframe,
                                  const std::vector<Eigen::Isometry3d>& poses);
   // Covisibility (LoopClosureConfig::covisible_keyframes): the keyframe as tracking prepared it,
-  // aligned against the recent ones, and the graph over them solved with those edges.
+  // aligned against the recent ones, and the graph over them solved with those edges. `poses`:
+  // the keyframes up to this one (edges to later ones are left out of the solve).
   struct Linked {
     std::size_t edges = 0, rejected = 0;
-    std::vector<Eigen::Isometry3d> solved;  // every keyframe's pose; empty: no edge added
+    std::vector<Eigen::Isometry3d> solved;  // the poses given, solved; empty: no edge added
   };
   Linked link_covisible(const FrameTracker::PreparedKeyframe& keyframe, const tracking::OdometryConfig& odometry,
                         const std::vector<Eigen::Isometry3d>& poses);

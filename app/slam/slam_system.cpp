@@ -153,8 +153,10 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
   if (config_.loop_closure.covisible_keyframes <= 0 || !job.prepared.frame) return;
   std::vector<Eigen::Isometry3d> poses;
   {
+    // Up to this keyframe: those tracking added since (threaded, overlapped) follow it, so the
+    // solution does not depend on how far tracking got meanwhile (live = reconstruct).
     std::lock_guard lock(mutex_);
-    poses = keyframe_world_;
+    poses.assign(keyframe_world_.begin(), keyframe_world_.begin() + static_cast<long>(job.keyframe) + 1);
   }
   const BackEnd::Linked linked = back_end_.link_covisible(job.prepared, job.odometry, poses);
   std::vector<Eigen::Isometry3d> mapper_corrections;
