@@ -154,7 +154,7 @@ void SlamSystem::link_covisible(const KeyframeJob& job) {
   std::vector<Eigen::Isometry3d> poses;
   {
     // Up to this keyframe: those tracking added since (threaded, overlapped) follow it, so the
-    // solution does not depend on how far tracking got meanwhile (live = reconstruct).
+    // solution does not depend on how far tracking got meanwhile.
     std::lock_guard lock(mutex_);
     poses.assign(keyframe_world_.begin(), keyframe_world_.begin() + static_cast<long>(job.keyframe) + 1);
   }
