@@ -52,6 +52,14 @@ std::vector<Eigen::Isometry3d> solve_window(const std::vector<Eigen::Isometry3d>
 
 }  // namespace
 
+std::vector<tracking::PoseGraphEdge> BackEnd::edges_among(std::size_t keyframes) const {
+  std::vector<tracking::PoseGraphEdge> edges;
+  std::lock_guard lock(graph_mutex_);
+  std::copy_if(edges_.begin(), edges_.end(), std::back_inserter(edges),
+               [&](const tracking::PoseGraphEdge& e) { return e.i < keyframes && e.j < keyframes; });
+  return edges;
+}
+
 BackEnd::BackEnd(const SlamConfig& config) : config_(config), places_(config.loop_closure.places) {}
 
 void BackEnd::add_odometry_edge(std::size_t reference, std::size_t keyframe, const Eigen::Isometry3d& T_reference_keyframe,
@@ -115,11 +123,7 @@ std::optional<BackEnd::Loop> BackEnd::close_loop(const splat::RgbdFrame& frame, 
   loop.i = found->keyframe, loop.j = keyframe, loop.loop = true;
   loop.T_i_j = found->T_keyframe_frame;
   loop.information = found->information;
-  std::vector<tracking::PoseGraphEdge> edges;
-  {
-    std::lock_guard lock(graph_mutex_);
-    edges = edges_;
-  }
+  std::vector<tracking::PoseGraphEdge> edges = edges_among(poses.size());
   edges.push_back(loop);
   const Eigen::Isometry3d revealed = (poses[loop.i].inverse() * poses[loop.j]).inverse() * loop.T_i_j;
   Loop result;
@@ -179,12 +183,7 @@ BackEnd::Linked BackEnd::link_covisible(const FrameTracker::PreparedKeyframe& ke
   const int wanted = config_.loop_closure.covisible_keyframes;
   Linked linked;
   if (wanted <= 0 || !keyframe.frame) return linked;
-  std::vector<tracking::PoseGraphEdge> edges;
-  {
-    std::lock_guard lock(graph_mutex_);
-    std::copy_if(edges_.begin(), edges_.end(), std::back_inserter(edges),
-                 [&](const tracking::PoseGraphEdge& e) { return e.i < poses.size() && e.j < poses.size(); });
-  }
+  std::vector<tracking::PoseGraphEdge> edges = edges_among(poses.size());
   const tracking::PoseGraphConfig& graph = config_.loop_closure.graph;
   std::vector<tracking::PoseGraphEdge> added;
   // Only a blurred keyframe (blur_scale_px or more at the finest level): its reference edge is

@@ -40,9 +40,10 @@ class BackEnd {
   };
   std::optional<Placement> place(const splat::RgbdFrame& frame, const std::function<bool(std::size_t)>& eligible);
 
-  // For a keyframe just mapped (the mapping thread's), given every keyframe's pose now. Loop
-  // closure: place recognition against the keyframes at least min_separation older, and the
-  // whole graph solved with the loop; the keyframe then joins the places.
+  // For a keyframe just mapped (the mapping thread's), given the poses of the keyframes up to it
+  // (edges to later ones are left out of the solve). Loop closure: place recognition against the
+  // keyframes at least min_separation older, and that graph solved with the loop; the keyframe
+  // then joins the places.
   struct Loop {
     std::size_t matched_keyframe = 0;
     int inliers = 0;
@@ -84,6 +85,8 @@ class BackEnd {
 
  private:
   splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;  // at dense_width
+  // The graph's edges between keyframes 0 .. keyframes - 1.
+  std::vector<tracking::PoseGraphEdge> edges_among(std::size_t keyframes) const;
   std::optional<Placement> place(const splat::RgbdFrame& thumb, const tracking::PlaceFeatures& features,
                                  const std::function<bool(std::size_t)>& eligible);
 

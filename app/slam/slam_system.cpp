@@ -114,12 +114,15 @@ double frame_mib(const splat::RgbdFrame& frame) {
 
 }  // namespace
 
+std::vector<Eigen::Isometry3d> SlamSystem::keyframes_up_to(std::size_t keyframe) const {
+  // Those tracking added since (threaded, overlapped) follow the last one solved, so a solution
+  // does not depend on how far tracking got meanwhile.
+  std::lock_guard lock(mutex_);
+  return {keyframe_world_.begin(), keyframe_world_.begin() + static_cast<long>(keyframe) + 1};
+}
+
 void SlamSystem::close_loops(const KeyframeJob& job) {
-  std::vector<Eigen::Isometry3d> poses;
-  {
-    std::lock_guard lock(mutex_);
-    poses = keyframe_world_;
-  }
+  const std::vector<Eigen::Isometry3d> poses = keyframes_up_to(job.keyframe);
   const std::optional<BackEnd::Loop> loop = back_end_.close_loop(job.frame, job.keyframe, poses);
   if (!loop) return;
   std::vector<Eigen::Isometry3d> mapper_corrections;
@@ -151,13 +154,7 @@ std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eige
 
 void SlamSystem::link_covisible(const KeyframeJob& job) {
   if (config_.loop_closure.covisible_keyframes <= 0 || !job.prepared.frame) return;
-  std::vector<Eigen::Isometry3d> poses;
-  {
-    // Up to this keyframe: those tracking added since (threaded, overlapped) follow it, so the
-    // solution does not depend on how far tracking got meanwhile.
-    std::lock_guard lock(mutex_);
-    poses.assign(keyframe_world_.begin(), keyframe_world_.begin() + static_cast<long>(job.keyframe) + 1);
-  }
+  const std::vector<Eigen::Isometry3d> poses = keyframes_up_to(job.keyframe);
   const BackEnd::Linked linked = back_end_.link_covisible(job.prepared, job.odometry, poses);
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {

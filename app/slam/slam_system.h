@@ -206,6 +206,8 @@ class SlamSystem {
   // end's solutions applied to the keyframes, the map and tracking.
   void close_loops(const KeyframeJob& job);
   void link_covisible(const KeyframeJob& job);
+  // The poses of keyframes 0 .. keyframe, which the back end solves for that keyframe's job.
+  std::vector<Eigen::Isometry3d> keyframes_up_to(std::size_t keyframe) const;
   // Moves every keyframe (and with them the map and tracking's motion model) from `before`
   // (the poses the graph was solved from) to `solved`; the caller holds mutex_ and calls
   // mapper_.correct_keyframes with what it returns once it has released it.
