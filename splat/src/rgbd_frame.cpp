@@ -1,11 +1,54 @@
 #include "splat/rgbd_frame.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "splat/error.h"
 
 namespace splat {
+
+namespace {
+
+// downsample's factor 2 (every level of the odometry's pyramids), unrolled: the same sums in the
+// same order as the general loop, so the same result bit for bit, at a fraction of its time.
+void halve(const RgbdFrame& f, RgbdFrame& out, float inv_area) {
+  const int w = out.width(), h = out.height();
+  const std::size_t in_w = static_cast<std::size_t>(f.width());
+  for (int y = 0; y < h; ++y) {
+    const std::size_t top = static_cast<std::size_t>(2 * y) * in_w, bottom = top + in_w;
+    const float* rgb_top = f.rgb.data() + top * 3;
+    const float* rgb_bottom = f.rgb.data() + bottom * 3;
+    const float* depth_top = f.depth.data() + top;
+    const float* depth_bottom = f.depth.data() + bottom;
+    float* rgb_out = out.rgb.data() + static_cast<std::size_t>(y) * w * 3;
+    float* depth_out = out.depth.data() + static_cast<std::size_t>(y) * w;
+    for (int x = 0; x < w; ++x) {
+      const int a = 2 * x, b = a + 1;
+      for (int c = 0; c < 3; ++c) {
+        rgb_out[3 * x + c] = (((rgb_top[3 * a + c] + rgb_top[3 * b + c]) + rgb_bottom[3 * a + c]) + rgb_bottom[3 * b + c]) * inv_area;
+      }
+      float depth = 0;
+      int valid = 0;
+      for (const float d : {depth_top[a], depth_top[b], depth_bottom[a], depth_bottom[b]}) {
+        if (d > 0) depth += d, ++valid;
+      }
+      depth_out[x] = valid > 0 ? depth / static_cast<float>(valid) : 0.f;
+    }
+    if (!f.ignore.empty()) {
+      for (int x = 0; x < w; ++x) {
+        const std::size_t a = top + 2 * static_cast<std::size_t>(x), c = bottom + 2 * static_cast<std::size_t>(x);
+        out.ignore[static_cast<std::size_t>(y) * w + x] =
+            std::max({f.ignore[a], f.ignore[a + 1], f.ignore[c], f.ignore[c + 1]});
+      }
+    }
+    if (!f.labels.empty()) {
+      for (int x = 0; x < w; ++x) out.labels[static_cast<std::size_t>(y) * w + x] = f.labels[top + 2 * static_cast<std::size_t>(x)];
+    }
+  }
+}
+
+}  // namespace
 
 RgbdFrame downsample(const RgbdFrame& f, int factor) {
   if (factor < 1) throw Error("downsample: factor is " + std::to_string(factor) + ", expected >= 1");
@@ -33,6 +76,10 @@ RgbdFrame downsample(const RgbdFrame& f, int factor) {
   if (ignoring) out.ignore.assign(static_cast<std::size_t>(w) * h, 0);
   if (!f.labels.empty()) out.labels.assign(static_cast<std::size_t>(w) * h, 0);
   const float inv_area = 1.f / static_cast<float>(factor * factor);
+  if (factor == 2) {
+    halve(f, out, inv_area);
+    return out;
+  }
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       float rgb[3] = {0, 0, 0}, depth = 0;

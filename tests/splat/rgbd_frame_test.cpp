@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -106,6 +108,51 @@ TEST(ReprojectDepth, FrameKeepsItsColourAndLosesItsOffset) {
   EXPECT_EQ(moved.rgb, f.rgb);
   EXPECT_EQ(moved.timestamp, 3.0);
   EXPECT_NEAR(moved.depth[30 * f.width() + 40], 2.1f, 1e-5);
+}
+
+// The box average of every factor, factor 2 included (the odometry's pyramids take its own
+// unrolled path): colour averages every pixel of a block, depth only the measured ones, the
+// ignore mask keeps a block's largest reason, labels its first pixel; an odd last row and
+// column are dropped.
+TEST(Downsample, AveragesEachBlockForEveryFactor) {
+  splat::RgbdFrame f;
+  f.camera.width = 13, f.camera.height = 9;
+  f.camera.fx = f.camera.fy = 10, f.camera.cx = 6.5, f.camera.cy = 4.5;
+  const std::size_t pixels = 13 * 9;
+  f.rgb.resize(pixels * 3), f.depth.resize(pixels), f.ignore.resize(pixels), f.labels.resize(pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    for (int c = 0; c < 3; ++c) f.rgb[i * 3 + c] = static_cast<float>((i * 7 + c * 5) % 17) / 16.f;
+    f.depth[i] = i % 5 == 0 ? 0.f : 1.f + static_cast<float>(i % 11) / 8.f;  // holes
+    f.ignore[i] = static_cast<uint8_t>(i % 13 == 0 ? 2 : i % 7 == 0);
+    f.labels[i] = static_cast<uint8_t>(i % 4);
+  }
+  for (int factor : {2, 3, 4}) {
+    SCOPED_TRACE("factor " + std::to_string(factor));
+    const splat::RgbdFrame d = splat::downsample(f, factor);
+    ASSERT_EQ(d.width(), 13 / factor);
+    ASSERT_EQ(d.height(), 9 / factor);
+    EXPECT_DOUBLE_EQ(d.camera.fx, 10.0 / factor);
+    EXPECT_DOUBLE_EQ(d.camera.cx, 6.5 / factor);
+    for (int y = 0; y < d.height(); ++y) {
+      for (int x = 0; x < d.width(); ++x) {
+        double rgb[3] = {0, 0, 0}, depth = 0;
+        int measured = 0, ignored = 0;
+        for (int dy = 0; dy < factor; ++dy) {
+          for (int dx = 0; dx < factor; ++dx) {
+            const std::size_t i = static_cast<std::size_t>(y * factor + dy) * 13 + x * factor + dx;
+            for (int c = 0; c < 3; ++c) rgb[c] += f.rgb[i * 3 + c];
+            if (f.depth[i] > 0) depth += f.depth[i], ++measured;
+            ignored = std::max<int>(ignored, f.ignore[i]);
+          }
+        }
+        const std::size_t o = static_cast<std::size_t>(y) * d.width() + x;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(d.rgb[o * 3 + c], rgb[c] / (factor * factor), 1e-6);
+        EXPECT_NEAR(d.depth[o], measured ? depth / measured : 0.0, 1e-6) << x << ", " << y;
+        EXPECT_EQ(d.ignore[o], ignored) << x << ", " << y;
+        EXPECT_EQ(d.labels[o], f.labels[static_cast<std::size_t>(y * factor) * 13 + x * factor]);
+      }
+    }
+  }
 }
 
 }  // namespace
