@@ -153,9 +153,9 @@ std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eige
 }
 
 void SlamSystem::link_covisible(const KeyframeJob& job) {
-  if (config_.loop_closure.covisible_keyframes <= 0 || !job.prepared.frame) return;
+  if (config_.loop_closure.covisible_keyframes <= 0) return;  // with_tracking_reference() gave every job its keyframe
   const std::vector<Eigen::Isometry3d> poses = keyframes_up_to(job.keyframe);
-  const BackEnd::Linked linked = back_end_.link_covisible(job.prepared, job.odometry, poses);
+  const BackEnd::Linked linked = back_end_.link_covisible(tracking_reference(job), job.odometry, poses);
   std::vector<Eigen::Isometry3d> mapper_corrections;
   {
     std::lock_guard lock(mutex_);
@@ -181,7 +181,15 @@ void SlamSystem::with_tracking_reference(KeyframeJob& job) const {
   // keyframe's pyramid were fresh memory for tracking's next frames (docs/measurements.md).
   if (config_.front_end != "odometry" || config_.loop_closure.covisible_keyframes <= 0) return;
   job.prepared = tracker_.newest_reference();
+  job.pyramid = std::exchange(job.prepared.frame, nullptr);
   job.odometry = tracker_.odometry_config();
+}
+
+FrameTracker::PreparedKeyframe SlamSystem::tracking_reference(const KeyframeJob& job) const {
+  FrameTracker::PreparedKeyframe prepared = job.prepared;
+  prepared.frame = job.pyramid.lock();
+  if (!prepared.frame) prepared.frame = prepare_odometry_frame(job.frame, prepared.labels, config_);
+  return prepared;
 }
 
 double SlamSystem::map_keyframe(const KeyframeJob& job) {

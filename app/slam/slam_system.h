@@ -182,13 +182,19 @@ class SlamSystem {
     Eigen::Isometry3d T_world_cam;
     std::size_t keyframe;  // its number among the system's keyframes
     // Odometry with covisibility: the keyframe as tracking prepared it (numbered as `keyframe`: it
-    // is tracking's newest reference), and tracking's settings then; empty otherwise.
-    FrameTracker::PreparedKeyframe prepared;
+    // is tracking's newest reference), and tracking's settings then; empty otherwise. Its pyramid
+    // is held weakly: a backlog of keyframes behind mapping would hold 2.4 MiB each at 640x480
+    // (tracking_reference() makes it again once tracking has let it go).
+    FrameTracker::PreparedKeyframe prepared;  // its frame empty: see pyramid
+    std::weak_ptr<const tracking::OdometryFrame> pyramid;
     tracking::OdometryConfig odometry;
   };
   // Odometry with covisibility: gives the job tracking's newest reference (the job's keyframe) and
   // its settings.
   void with_tracking_reference(KeyframeJob& job) const;
+  // The job's keyframe as tracking prepared it: tracking's pyramid if it still holds it, else the
+  // same made again from the job's frame.
+  FrameTracker::PreparedKeyframe tracking_reference(const KeyframeJob& job) const;
   // Maps one keyframe, then publishes the map and the keyframes' moved poses; returns its time.
   double map_keyframe(const KeyframeJob& job);
   // The two halves of map_keyframe: the mapper's optimization (the mapping thread's, or the
