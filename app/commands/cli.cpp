@@ -317,6 +317,11 @@ int run_cli(int argc, char** argv) {
                       "Depth taken up to this many seconds before or after its colour image (unsynchronized cameras)")
       ->check(CLI::Range(0.0, 0.1));
   gen_cmd
+      ->add_option("--rolling-shutter", seq.rolling_shutter,
+                   "Rolling shutter: colour and depth rows read top to bottom over this many seconds "
+                   "(Kinect class: about 0.03)")
+      ->check(CLI::Range(0.0, 1.0));
+  gen_cmd
       ->add_option("--gain-swing", seq.gain_swing,
                    "Auto exposure hunting: the colour gain swings as exp(S sin(2 pi t / 3 s)), "
                    "saturating at white")

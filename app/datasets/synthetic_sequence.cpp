@@ -335,6 +335,11 @@ std::vector<Eigen::Vector2d> lens_directions(const SyntheticOptions& o, double f
   return o.distortion.any() ? undistort_normalized(o.distortion, at) : at;
 }
 
+// Seconds from the frame's middle row to row y's instant (SyntheticOptions::rolling_shutter).
+double row_offset(const SyntheticOptions& o, int y) {
+  return o.rolling_shutter * ((y + 0.5) / o.height - 0.5);
+}
+
 }  // namespace
 
 void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticOptions& o) {
@@ -346,12 +351,12 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
   }
   if (o.blur_samples < 1 || !(o.exposure >= 0) || !(o.depth_noise >= 0) ||
       !(o.depth_holes >= 0 && o.depth_holes < 1) || !(o.shake_peak_rate >= 0) || !(o.fps > 0) ||
-      !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps) ||
+      !(o.depth_lag >= 0 && o.depth_lag < 0.5 / o.fps) || !(o.rolling_shutter >= 0 && o.rolling_shutter <= 1 / o.fps) ||
       !(o.gain_swing >= 0 && o.gain_swing <= 2) || !(o.color_focal_ratio >= 0.5 && o.color_focal_ratio <= 2) ||
       !o.color_centre_shift.allFinite()) {
     throw splat::Error(
         "synthetic sequence: blur_samples >= 1, fps > 0 and non-negative exposure, noise, shake "
-        "and holes below 1, depth lag under half a frame, gain swing in [0, 2], colour focal ratio in [0.5, 2] "
+        "and holes below 1, depth lag under half a frame, a rolling shutter's readout within a frame, gain swing in [0, 2], colour focal ratio in [0.5, 2] "
         "expected");
   }
   if (o.distortion
@@ -403,10 +408,18 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     // Colour, row by row on every core (no random numbers: the same image on any machine).
     pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {
       const int y = static_cast<int>(row);
+      std::vector<std::pair<Eigen::Isometry3d, double>> row_instants;
+      if (o.rolling_shutter > 0) {
+        for (const auto& [at, at_seconds] : instants) {
+          const double t = at_seconds + row_offset(o, y);
+          row_instants.emplace_back(camera_pose(o, t), t);
+        }
+      }
+      const auto& seen = o.rolling_shutter > 0 ? row_instants : instants;
       for (int x = 0; x < o.width; ++x) {
         Vector3d color = Vector3d::Zero();
-        const double weight = 0.25 / static_cast<double>(instants.size());
-        for (const auto& [at, at_seconds] : instants) {
+        const double weight = 0.25 / static_cast<double>(seen.size());
+        for (const auto& [at, at_seconds] : seen) {
           for (int s = 0; s < 4; ++s) {
             const Vector3d dir_cam = color_direction(x, y, s);
             Hit hit;
@@ -428,14 +441,16 @@ void write_synthetic_sequence(const std::filesystem::path& dir, const SyntheticO
     const Eigen::Isometry3d depth_pose = o.depth_lag > 0 ? camera_pose(o, depth_seconds) : pose;
     std::vector<double> z_true(static_cast<std::size_t>(o.width) * o.height, 0.0);
     std::vector<uint8_t> moving(z_true.size(), 0), grazing(z_true.size(), 0);
-    const Eigen::Isometry3d world_to_depth = depth_pose.inverse();
     pool.parallel_for(static_cast<std::size_t>(o.height), [&](std::size_t row) {
       const int y = static_cast<int>(row);
+      const double row_seconds = (o.depth_lag > 0 ? depth_seconds : seconds) + row_offset(o, y);
+      const Eigen::Isometry3d row_pose = o.rolling_shutter > 0 ? camera_pose(o, row_seconds) : depth_pose;
+      const Eigen::Isometry3d world_to_depth = row_pose.inverse();
       for (int x = 0; x < o.width; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
-        const Vector3d ray = (depth_pose.linear() * direction(x, y, 4)).normalized();
+        const Vector3d ray = (row_pose.linear() * direction(x, y, 4)).normalized();
         Hit hit;
-        trace(scene, o, depth_pose.translation(), ray, o.depth_lag > 0 ? depth_seconds : seconds, hit);
+        trace(scene, o, row_pose.translation(), ray, row_seconds, hit);
         if (!std::isfinite(hit.t)) continue;
         z_true[i] = (world_to_depth * hit.point).z();
         labels.at(x, y) = hit.label;

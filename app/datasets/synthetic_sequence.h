@@ -49,6 +49,10 @@ struct SyntheticOptions {
   // to this many seconds before or after the colour image it pairs with, the offset drifting
   // through that range, and stamped with its own time. 0: taken together.
   double depth_lag = 0;
+  // Rolling shutter (the CMOS sensors of Kinect-class cameras, colour and depth alike): the rows
+  // are read top to bottom over this many seconds, each seen from the camera's pose at its own
+  // instant; the frame's stamp and ground truth are its middle row's. 0: a global shutter.
+  double rolling_shutter = 0;
   // Auto exposure hunting: the colour image's gain swings as exp(gain_swing sin(2 pi t / 3 s)),
   // its values clipped at 1 (saturated). 0: a fixed exposure.
   double gain_swing = 0;

@@ -20,6 +20,11 @@ std::vector<SyntheticCase> hard_case_suite() {
   add("unsynced_depth", "fast_rotation with each depth image up to 15 ms before or after its colour (Kinect v1)", o);
   o.depth_lag = 0;
 
+  o.rolling_shutter = 0.028;
+  add("rolling_shutter",
+      "fast_rotation through rolling-shutter colour and depth, rows read over 28 ms (Kinect class)", o);
+  o.rolling_shutter = 0;
+
   o.gain_swing = 0.3;
   add("exposure_swing",
       "fast_rotation with the colour gain swinging from 0.74x to 1.35x every 3 s (auto exposure)",

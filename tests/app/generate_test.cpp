@@ -91,7 +91,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
   std::set<std::string> names;
   bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
        long_one = false, moving = false, walking = false, unsynced = false, exposure = false,
-       lens = false, unregistered = false;
+       lens = false, unregistered = false, rolling = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -106,9 +106,10 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     exposure |= c.options.gain_swing > 0;
     lens |= c.options.distortion.any();
     unregistered |= c.options.color_focal_ratio != 1;
+    rolling |= c.options.rolling_shutter > 0;
   }
   EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && walking &&
-              unsynced && exposure && lens && unregistered);
+              unsynced && exposure && lens && unregistered && rolling);
 }
 
 }  // namespace
