@@ -108,6 +108,7 @@ json tracker_to_json(const FrameTracker::State& t) {
           {"residual_spreads", t.residual_spreads},
           {"exposure_samples", t.exposure_samples},
           {"reference_labels", label_sets_to_json(t.reference_labels)},
+          {"reference_twists", t.reference_twists},
           {"moving", labels_to_json(t.moving)}};
 }
 
@@ -126,6 +127,8 @@ FrameTracker::State tracker_from_json(const json& j, std::uint64_t& label_pixels
   if (j.contains("reference_labels"))
     t.reference_labels =
         label_sets_from_json(j.at("reference_labels"), "tracking's references", label_pixels_left);
+  // Checkpoints from before the rolling shutter's correction have no velocities (zero).
+  t.reference_twists = j.value("reference_twists", std::vector<std::array<double, 6>>{});
   if (j.contains("moving"))
     t.moving =
         labels_from_json(j.at("moving"), "the last frame's moving labels", label_pixels_left);
@@ -393,7 +396,8 @@ void write_run_checkpoint(const std::filesystem::path& path, const RunCheckpoint
                  {"tracker_correction", pose_to_json(s.tracker_correction)},
                  {"covisible", s.back_end.covisible},
                  {"covisible_rates", s.back_end.covisible_rates},
-                 {"covisible_labels", label_sets_to_json(s.back_end.covisible_labels)}};
+                 {"covisible_labels", label_sets_to_json(s.back_end.covisible_labels)},
+                 {"covisible_twists", s.back_end.covisible_twists}};
   if (s.unpublished) header["unpublished"] = unpublished_to_json(*s.unpublished);
   const std::string text = header.dump();
   write_atomically(path, [&](const std::filesystem::path& tmp) {
@@ -444,6 +448,7 @@ RunCheckpoint read_run_checkpoint(const std::filesystem::path& path) {
     // Checkpoints from before covisibility continue with none (it links the next keyframes).
     c.slam.back_end.covisible = header.value("covisible", std::vector<std::size_t>{});
     c.slam.back_end.covisible_rates = header.value("covisible_rates", std::vector<double>{});
+    c.slam.back_end.covisible_twists = header.value("covisible_twists", std::vector<std::array<double, 6>>{});
     if (header.contains("covisible_labels")) {
       c.slam.back_end.covisible_labels = label_sets_from_json(
           header.at("covisible_labels"), "covisibility's keyframes", label_pixels_left);

@@ -73,6 +73,7 @@ std::vector<Field> fields(SlamConfig& c) {
       {"odometry", "depth_noise", &o.depth_noise},
       {"odometry", "t_dof", &o.t_dof},
       {"odometry", "depth_weight", &o.depth_weight},
+      {"odometry", "rolling_shutter", &o.rolling_shutter},
       {"odometry", "blur_scale_px", &o.blur_scale_px},
       {"odometry", "exposure", &o.exposure},
       {"odometry", "estimate_exposure", &o.estimate_exposure},

@@ -199,7 +199,8 @@ BackEnd::Linked BackEnd::link_covisible(const FrameTracker::PreparedKeyframe& ke
     weighted.depth_weight =
         tracking::blur_aware_depth_weight(odometry, *keyframe.frame, keyframe.angular_rate, earlier.angular_rate);
     const tracking::OdometryResult r =
-        tracking::align_rgbd(*earlier.frame, *keyframe.frame, poses[j].inverse() * poses[i], weighted);
+        tracking::align_rgbd(*earlier.frame, *keyframe.frame, poses[j].inverse() * poses[i], weighted,
+                             {earlier.twist, keyframe.twist});
     if (!r.converged) {
       ++linked.rejected;
       continue;
@@ -242,6 +243,7 @@ BackEnd::State BackEnd::state() const {
     s.covisible.push_back(k.keyframe);
     s.covisible_rates.push_back(k.angular_rate);
     s.covisible_labels.push_back(k.labels);
+    s.covisible_twists.push_back(twist_array(k.twist));
   }
   return s;
 }
@@ -263,7 +265,7 @@ void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::siz
   }
   // Prepared as tracking prepared them, their moving regions left out.
   covisible_ =
-      restore_prepared_keyframes(s.covisible, s.covisible_rates, s.covisible_labels, keyframe,
+      restore_prepared_keyframes(s.covisible, s.covisible_rates, s.covisible_labels, s.covisible_twists, keyframe,
                                  config_, "SlamSystem::restore: covisibility's keyframes");
   {
     std::lock_guard lock(places_mutex_);

@@ -75,6 +75,7 @@ class BackEnd {
     std::vector<double> covisible_rates;
     std::vector<std::vector<uint8_t>>
         covisible_labels;  // their moving regions (FrameTracker::PreparedKeyframe)
+    std::vector<std::array<double, 6>> covisible_twists;  // their velocities; empty: zero
   };
   State state() const;
   // Continues from `state` on a back end that has seen nothing: `keyframe(number)` gives a

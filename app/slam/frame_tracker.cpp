@@ -1,6 +1,7 @@
 #include "slam/frame_tracker.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -70,15 +71,26 @@ std::shared_ptr<const tracking::OdometryFrame> prepare_odometry_frame(
   return std::make_shared<const tracking::OdometryFrame>(frame, config.odometry, left_out);
 }
 
+std::array<double, 6> twist_array(const Eigen::Matrix<double, 6, 1>& twist) {
+  std::array<double, 6> out;
+  Eigen::Map<Eigen::Matrix<double, 6, 1>>(out.data()) = twist;
+  return out;
+}
+
 std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
     const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
-    const std::vector<std::vector<uint8_t>>& labels,
+    const std::vector<std::vector<uint8_t>>& labels, const std::vector<std::array<double, 6>>& twists,
     const std::function<splat::RgbdFrame(std::size_t)>& keyframe, const SlamConfig& config,
     const std::string& what) {
-  if (rates.size() != numbers.size() || (!labels.empty() && labels.size() != numbers.size())) {
+  if (rates.size() != numbers.size() || (!labels.empty() && labels.size() != numbers.size()) ||
+      (!twists.empty() && twists.size() != numbers.size())) {
     throw splat::Error(what + ": " + std::to_string(numbers.size()) + " keyframes with " +
-                       std::to_string(rates.size()) + " angular rates and " +
-                       std::to_string(labels.size()) + " label sets");
+                       std::to_string(rates.size()) + " angular rates, " + std::to_string(twists.size()) +
+                       " velocities and " + std::to_string(labels.size()) + " label sets");
+  }
+  for (const std::array<double, 6>& t : twists) {
+    if (!std::all_of(t.begin(), t.end(), [](double v) { return std::isfinite(v); }))
+      throw splat::Error(what + ": a keyframe's velocity is not finite");
   }
   std::deque<FrameTracker::PreparedKeyframe> prepared;
   for (std::size_t k = 0; k < numbers.size(); ++k) {
@@ -87,7 +99,9 @@ std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
     check_labels_fit(frame, left_out, moving_factor(frame.width(), config),
                      what + ", keyframe " + std::to_string(numbers[k]));
     prepared.push_back({prepare_odometry_frame(frame, left_out, config), numbers[k], rates[k],
-                        std::move(left_out)});
+                        std::move(left_out),
+                        twists.empty() ? Eigen::Matrix<double, 6, 1>::Zero()
+                                       : Eigen::Matrix<double, 6, 1>(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(twists[k].data()))});
   }
   return prepared;
 }
@@ -150,8 +164,12 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
     if (residual_spreads_.size() > 20) residual_spreads_.pop_front();
   }
   if (record.tracked) {
+    const bool first_motion = last_poses_.size() == 1;
     last_poses_ = {last_poses_.back(), record.T_world_cam};
     last_times_ = {last_times_.back(), frame.timestamp};
+    // The first keyframe's velocity is known once the next frame is placed.
+    if (first_motion && references_.size() == 1 && references_.front().keyframe == 0)
+      references_.front().twist = frame_twist_;
     if (config_.front_end == "odometry") exposure_.observe(*last_prepared_, angular_velocity());
   }
   ++since_keyframe_;
@@ -163,6 +181,13 @@ Eigen::Isometry3d FrameTracker::motion_over(double seconds) const {
   const double step = last_times_.back() - last_times_.front();
   if (!(step > 0)) return Eigen::Isometry3d::Identity();
   return splat::se3_exp(seconds / step * splat::se3_log(last_poses_.front().inverse() * last_poses_.back()));
+}
+
+Eigen::Matrix<double, 6, 1> FrameTracker::twist() const {
+  if (last_poses_.size() < 2) return Eigen::Matrix<double, 6, 1>::Zero();
+  const double step = last_times_.back() - last_times_.front();
+  if (!(step > 0)) return Eigen::Matrix<double, 6, 1>::Zero();
+  return splat::se3_log(last_poses_.front().inverse() * last_poses_.back()) / step;
 }
 
 Eigen::Vector3d FrameTracker::angular_velocity() const {
@@ -178,8 +203,18 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   tracking::OdometryConfig odometry = odometry_config();
   odometry.depth_weight =
       tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm(), reference.angular_rate);
-  const tracking::OdometryResult r =
-      tracking::align_rgbd(*reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry);
+  tracking::OdometryResult r = tracking::align_rgbd(
+      *reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry, {reference.twist, twist()});
+  frame_twist_ = twist();
+  const double dt = last_times_.empty() ? 0 : last_prepared_->timestamp() - last_times_.back();
+  if (odometry.rolling_shutter > 0 && r.converged && dt > 0 && last_poses_.size() == 2) {
+    // The rows' instants need the velocity at this frame: the last two velocities (centred half
+    // a frame and a frame and a half back) extrapolated to it, and the frame aligned again.
+    const Eigen::Matrix<double, 6, 1> back =
+        splat::se3_log(last_poses_.back().inverse() * (T_world_reference * r.T_cur_ref.inverse())) / dt;
+    frame_twist_ = back + 0.5 * (back - twist());
+    r = tracking::align_rgbd(*reference.frame, *last_prepared_, r.T_cur_ref, odometry, {reference.twist, frame_twist_});
+  }
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();
   record.tracked = r.converged;
   record.reason = r.reason;
@@ -353,7 +388,7 @@ void FrameTracker::keyframe_added(const FrameRecord& record, std::size_t number)
   since_keyframe_ = 0;
   if (config_.front_end != "odometry") return;
   references_.push_front(
-      {last_prepared_, number, angular_velocity().norm(), last_prepared_labels_});
+      {last_prepared_, number, angular_velocity().norm(), last_prepared_labels_, frame_twist_});
   if (references_.size() > static_cast<std::size_t>(config_.recovery_keyframes) + 1) references_.pop_back();
 }
 
@@ -393,6 +428,7 @@ FrameTracker::State FrameTracker::state() const {
     s.references.push_back(r.keyframe);
     s.reference_rates.push_back(r.angular_rate);
     s.reference_labels.push_back(r.labels);
+    s.reference_twists.push_back(twist_array(r.twist));
   }
   return s;
 }
@@ -410,7 +446,7 @@ void FrameTracker::restore(const State& s, const std::function<splat::RgbdFrame(
                        " references do not fit front end " + config_.front_end);
   }
   std::deque<Reference> references =
-      restore_prepared_keyframes(s.references, s.reference_rates, s.reference_labels, keyframe,
+      restore_prepared_keyframes(s.references, s.reference_rates, s.reference_labels, s.reference_twists, keyframe,
                                  config_, "tracking's references");
   // The last frame's labels (the next frame's prior) are at the references' scale.
   if (!s.moving.empty()) {

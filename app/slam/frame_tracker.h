@@ -99,6 +99,7 @@ class FrameTracker {
     std::size_t keyframe = 0;
     double angular_rate = 0;      // rad/s when it was taken: its own motion blur
     std::vector<uint8_t> labels;  // the moving regions left out of it (prepare_odometry_frame())
+    Eigen::Matrix<double, 6, 1> twist = Eigen::Matrix<double, 6, 1>::Zero();  // its velocity then (twist())
   };
   PreparedKeyframe newest_reference() const;
   tracking::OdometryConfig odometry_config() const;
@@ -133,6 +134,7 @@ class FrameTracker {
     // `references` (an empty set: none left out), and the last tracked frame's moving_labels().
     std::vector<std::vector<uint8_t>> reference_labels;
     std::vector<uint8_t> moving;
+    std::vector<std::array<double, 6>> reference_twists;  // their velocities (PreparedKeyframe::twist); empty: zero
   };
   State state() const;
   // Continues from `state`: `keyframe(number)` gives that keyframe's frame. Throws splat::Error
@@ -149,6 +151,9 @@ class FrameTracker {
   // The camera's angular velocity (rad/s, camera axes) over the last two tracked poses; zero
   // before there are two.
   Eigen::Vector3d angular_velocity() const;
+  // The camera's velocity [v, omega] (camera axes, per second) over the last two tracked poses;
+  // zero before there are two.
+  Eigen::Matrix<double, 6, 1> twist() const;
   // Odometry against `reference` from `guess` (world poses); fills the record's pose and result.
   bool align(const Reference& reference, const Eigen::Isometry3d& T_world_reference, const Eigen::Isometry3d& guess,
              FrameRecord& record) const;
@@ -184,15 +189,22 @@ class FrameTracker {
   splat::RgbdFrame moved_;       // depth_moved_frame(), where depth_moved_
   bool depth_moved_ = false;
   int moving_factor_ = 1;
+  // The last aligned frame's velocity, as its rows' instants were corrected with (twist() without
+  // a rolling shutter): a new keyframe keeps it.
+  mutable Eigen::Matrix<double, 6, 1> frame_twist_ = Eigen::Matrix<double, 6, 1>::Zero();
 };
 
 // Keyframes as tracking prepared them, restored from a checkpoint: keyframe numbers[k], taken at
-// angular rate rates[k], with labels[k] left out (`labels` empty: a checkpoint from before they
-// were kept, none left out). Throws splat::Error naming `what` on lists of different lengths or
-// labels that do not fit their keyframe.
+// angular rate rates[k] and velocity twists[k], with labels[k] left out (`labels` or `twists`
+// empty: a checkpoint from before they were kept, none left out, zero). Throws splat::Error naming
+// `what` on lists of different lengths, a velocity that is not finite or labels that do not fit
+// their keyframe.
+// A keyframe's velocity (PreparedKeyframe::twist) as checkpoints keep it.
+std::array<double, 6> twist_array(const Eigen::Matrix<double, 6, 1>& twist);
+
 std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
     const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
-    const std::vector<std::vector<uint8_t>>& labels,
+    const std::vector<std::vector<uint8_t>>& labels, const std::vector<std::array<double, 6>>& twists,
     const std::function<splat::RgbdFrame(std::size_t)>& keyframe, const SlamConfig& config,
     const std::string& what);
 

@@ -265,6 +265,14 @@ TEST(RunCheckpoint, HostileFilesGiveOneLineErrors) {
   EXPECT_EQ(back.factor, 2);
   EXPECT_EQ(back.runs, (std::vector<uint32_t>{5, 3, 4}));
   EXPECT_TRUE(app::read_run_checkpoint(dir / "moving.bin").slam.frames[0].moving.empty());
+  // The keyframes' velocities (the rolling shutter's correction) read back exactly.
+  ASSERT_FALSE(state.tracker.references.empty());
+  state.tracker.reference_twists.assign(state.tracker.references.size(), {0.1, -0.2, 0.3, 1.5, -2.25, 0.125});
+  state.back_end.covisible_twists.assign(state.back_end.covisible.size(), {-1, 2, -3, 4, -5, 6});
+  app::write_run_checkpoint(dir / "twists.bin", {state, {}});
+  const app::SlamSystem::State twists = app::read_run_checkpoint(dir / "twists.bin").slam;
+  EXPECT_EQ(twists.tracker.reference_twists, state.tracker.reference_twists);
+  EXPECT_EQ(twists.back_end.covisible_twists, state.back_end.covisible_twists);
   state.frames[1].moving.runs = {5, 3, 5};
   app::write_run_checkpoint(dir / "overrun.bin", {state, {}});
   GSLAM_EXPECT_ERROR(app::read_run_checkpoint(dir / "overrun.bin"), "overrun.bin",

@@ -30,6 +30,7 @@ void OdometryConfig::validate(const std::string& prefix) const {
   check.at_least("exposure", exposure, 0.0);
   check.positive("fade_per_blur_px", fade_per_blur_px);
   check.in_range("exposure_window", exposure_window, 2, 100000);
+  check.at_least("rolling_shutter", rolling_shutter, 0.0);
   check.positive("min_depth", min_depth);
   check.positive("max_depth_slope", max_depth_slope);
   if (!(max_depth > min_depth)) check.fail("max_depth", "a number > min_depth", max_depth);
@@ -193,9 +194,56 @@ inline void rank_update_upper(Eigen::Matrix<float, 6, 6>& h, const Eigen::Matrix
 // One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
 // t-distribution scales are estimated from these residuals first; otherwise the given ones are
 // used, so that costs at two poses compare. The cost is the mean robust cost per term.
-Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur,
-                 const Eigen::Isometry3d& T, const OdometryConfig& c, float gain,
-                 double& intensity_scale, double& depth_scale, bool estimate) {
+// The rolling shutter's correction (OdometryConfig::rolling_shutter): a static point seen at row
+// time s from the middle row's instant lies at p - s (omega x p + v) in the camera then.
+struct RollingShutter {
+  struct Twist {
+    Eigen::Vector3f v, omega;
+    explicit Twist(const Eigen::Matrix<double, 6, 1>& t) : v(t.head<3>().cast<float>()), omega(t.tail<3>().cast<float>()) {}
+  };
+  bool on = false;
+  float seconds_per_row = 0, middle_row = 0;
+  Twist reference, current;
+  RollingShutter(const OdometryConfig& c, const FrameMotion& motion, int height)
+      : on(c.rolling_shutter > 0 && (motion.reference.squaredNorm() > 0 || motion.current.squaredNorm() > 0)),
+        seconds_per_row(static_cast<float>(c.rolling_shutter / height)),
+        middle_row(0.5f * static_cast<float>(height)),
+        reference(motion.reference),
+        current(motion.current) {}
+  // The row time of array row y (pixel centres at integers), from the middle row's.
+  float seconds(float y) const { return (y + 0.5f - middle_row) * seconds_per_row; }
+  static Eigen::Vector3f moved(const Twist& t, const Eigen::Vector3f& p, float s) { return p - s * (t.omega.cross(p) + t.v); }
+  // Reference point k of `ref` in the current camera (rotation r, translation t) as the row it
+  // lands on sees it: first as the reference's middle row saw it, then moved to the row where the
+  // current frame's middle row would see it (a fraction of a row from where it lands). Behind
+  // the camera: z = 0.
+  Eigen::Vector3f seen(const Eigen::Matrix3f& r, const Eigen::Vector3f& t, const OdometryFrame::Level& ref,
+                       std::size_t k, float fy, float cy) const {
+    const float ref_row = static_cast<float>(ref.points[k] / ref.width);
+    const Eigen::Vector3f middle = r * moved(reference, ref.positions[k], -seconds(ref_row)) + t;
+    if (!(middle.z() > 0)) return Eigen::Vector3f::Zero();
+    return moved(current, middle, seconds(fy * middle.y() / middle.z() + cy));
+  }
+};
+
+// Reference point k in the current camera: rigidly, or as the row it lands on sees it
+// (RollingShutter::seen); the global shutter's instance is the plain transform, unchanged.
+template <bool kRolling>
+inline Eigen::Vector3f project_reference(const Eigen::Matrix3f& r, const Eigen::Vector3f& t,
+                                         const OdometryFrame::Level& ref, std::size_t k,
+                                         const RollingShutter& rolling, float fy, float cy) {
+  if constexpr (kRolling) {
+    return rolling.seen(r, t, ref, k, fy, cy);
+  } else {
+    return r * ref.positions[k] + t;
+  }
+}
+
+template <bool kRolling>
+Normal linearize_points(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur,
+                        const Eigen::Isometry3d& T, const OdometryConfig& c, float gain,
+                        double& intensity_scale, double& depth_scale, bool estimate,
+                        const RollingShutter& rolling) {
   const Eigen::Matrix3f r = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const float fx = static_cast<float>(cur.fx), fy = static_cast<float>(cur.fy);
@@ -211,7 +259,7 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
   Normal out;
   if (c.estimate_brightness) out.intensities.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3f p = r * ref.positions[k] + t;
+    const Eigen::Vector3f p = project_reference<kRolling>(r, t, ref, k, rolling, fy, cy);
     if (!(p.z() > static_cast<float>(c.min_depth))) continue;
     const float inv_z = 1.f / p.z();
     const float x = fx * p.x() * inv_z + cx, y = fy * p.y() * inv_z + cy;
@@ -276,6 +324,13 @@ Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cu
   if (c.depth_weight > 0)
     accumulate(geometric, c.depth_weight, depth_scale, &out.depth_median_square);
   return out;
+}
+
+Normal linearize(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur, const Eigen::Isometry3d& T,
+                 const OdometryConfig& c, float gain, double& intensity_scale, double& depth_scale,
+                 bool estimate, const RollingShutter& rolling) {
+  return rolling.on ? linearize_points<true>(ref, cur, T, c, gain, intensity_scale, depth_scale, estimate, rolling)
+                    : linearize_points<false>(ref, cur, T, c, gain, intensity_scale, depth_scale, estimate, rolling);
 }
 
 }  // namespace
@@ -392,7 +447,8 @@ double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame
 }
 
 OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& current,
-                          const Eigen::Isometry3d& initial_T_cur_ref, const OdometryConfig& config) {
+                          const Eigen::Isometry3d& initial_T_cur_ref, const OdometryConfig& config,
+                          const FrameMotion& motion) {
   config.validate();
   const std::size_t levels = config.iterations.size();
   if (reference.levels().size() != levels || current.levels().size() != levels ||
@@ -408,13 +464,14 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
     const OdometryFrame::Level& ref = reference.levels()[level];
     const OdometryFrame::Level& cur = current.levels()[level];
     const bool finest = level + 1 == levels;
+    const RollingShutter rolling(config, motion, cur.height);
     double intensity_scale = 0, depth_scale = 0;
-    Normal normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true);
+    Normal normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true, rolling);
     // The gain is held through each level's steps, so that the costs of two poses compare: fitted
     // here on the coarsest level, where each coarser level ends for the finer ones.
     if (config.estimate_brightness && level == 0) {
       gain = fit_gain(normal.intensities, config.t_dof, gain);
-      normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true);
+      normal = linearize(ref, cur, T, config, gain, intensity_scale, depth_scale, true, rolling);
     }
     double lambda = 0;  // Levenberg-Marquardt damping, raised only when a step fails
     for (int it = 0; it < config.iterations[level]; ++it) {
@@ -424,7 +481,7 @@ OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& c
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d candidate = splat::orthonormalized(splat::se3_exp(delta) * T);
       Normal next =
-          linearize(ref, cur, candidate, config, gain, intensity_scale, depth_scale, false);
+          linearize(ref, cur, candidate, config, gain, intensity_scale, depth_scale, false, rolling);
       ++result.iterations;
       if (next.cost <= normal.cost) {
         T = candidate;

@@ -46,6 +46,11 @@ struct OdometryConfig {
   // photometric residual compares the current frame with gain x reference, the gain fitted
   // robustly where the coarsest level starts and again where each coarser level ends.
   bool estimate_brightness = true;
+  // Rolling shutter: the camera reads its rows top to bottom over this many seconds (colour and
+  // depth alike), each row seen from the camera's pose at its own instant. With the camera's
+  // motion during the frames (align_rgbd's `twist`) each point is moved to where the frame's
+  // middle row saw it, the instant its pose is. 0: a global shutter.
+  double rolling_shutter = 0;
   double min_depth = 0.1, max_depth = 8.0;  // metres: measurements outside are ignored
   // Reference points are taken away from depth edges (depth changing by more than this fraction
   // per pixel) and holes: tracking_bench, teddy 0.79 -> 0.47 cm, 7-Scenes 3.06 -> 2.67 cm; at
@@ -126,7 +131,14 @@ double blur_aware_depth_weight(const OdometryConfig& config, const OdometryFrame
 
 // Aligns `current` to `reference` starting from `initial_T_cur_ref`. A bad alignment is reported
 // in the result, never thrown; mismatched pyramids throw splat::Error.
+// The camera's velocity [v, omega] (its own axes, per second) as each frame was taken, for the
+// rolling shutter's correction (OdometryConfig::rolling_shutter); zero: none.
+struct FrameMotion {
+  Eigen::Matrix<double, 6, 1> reference = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> current = Eigen::Matrix<double, 6, 1>::Zero();
+};
 OdometryResult align_rgbd(const OdometryFrame& reference, const OdometryFrame& current,
-                          const Eigen::Isometry3d& initial_T_cur_ref, const OdometryConfig& config);
+                          const Eigen::Isometry3d& initial_T_cur_ref, const OdometryConfig& config,
+                          const FrameMotion& motion = {});
 
 }  // namespace tracking
