@@ -1,7 +1,6 @@
 #include "slam/frame_tracker.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -169,7 +168,7 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
     last_times_ = {last_times_.back(), frame.timestamp};
     // The first keyframe's velocity is known once the next frame is placed.
     if (first_motion && references_.size() == 1 && references_.front().keyframe == 0)
-      references_.front().twist = frame_twist_;
+      references_.front().twist = twist();
     if (config_.front_end == "odometry") exposure_.observe(*last_prepared_, angular_velocity());
   }
   ++since_keyframe_;

@@ -191,9 +191,6 @@ inline void rank_update_upper(Eigen::Matrix<float, 6, 6>& h, const Eigen::Matrix
   }
 }
 
-// One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
-// t-distribution scales are estimated from these residuals first; otherwise the given ones are
-// used, so that costs at two poses compare. The cost is the mean robust cost per term.
 // The rolling shutter's correction (OdometryConfig::rolling_shutter): a static point seen at row
 // time s from the middle row's instant lies at p - s (omega x p + v) in the camera then.
 struct RollingShutter {
@@ -239,6 +236,9 @@ inline Eigen::Vector3f project_reference(const Eigen::Matrix3f& r, const Eigen::
   }
 }
 
+// One linearization of every reference point of a level at T_cur_ref. With `estimate`, the
+// t-distribution scales are estimated from these residuals first; otherwise the given ones are
+// used, so that costs at two poses compare. The cost is the mean robust cost per term.
 template <bool kRolling>
 Normal linearize_points(const OdometryFrame::Level& ref, const OdometryFrame::Level& cur,
                         const Eigen::Isometry3d& T, const OdometryConfig& c, float gain,
