@@ -76,6 +76,14 @@ std::array<double, 6> twist_array(const Eigen::Matrix<double, 6, 1>& twist) {
   return out;
 }
 
+namespace {
+
+Eigen::Matrix<double, 6, 1> twist_from_array(const std::array<double, 6>& twist) {
+  return Eigen::Map<const Eigen::Matrix<double, 6, 1>>(twist.data());
+}
+
+}  // namespace
+
 std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
     const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
     const std::vector<std::vector<uint8_t>>& labels, const std::vector<std::array<double, 6>>& twists,
@@ -99,8 +107,7 @@ std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
                      what + ", keyframe " + std::to_string(numbers[k]));
     prepared.push_back({prepare_odometry_frame(frame, left_out, config), numbers[k], rates[k],
                         std::move(left_out),
-                        twists.empty() ? Eigen::Matrix<double, 6, 1>::Zero()
-                                       : Eigen::Matrix<double, 6, 1>(Eigen::Map<const Eigen::Matrix<double, 6, 1>>(twists[k].data()))});
+                        twists.empty() ? Eigen::Matrix<double, 6, 1>::Zero() : twist_from_array(twists[k])});
   }
   return prepared;
 }
@@ -175,26 +182,30 @@ FrameRecord FrameTracker::track(const splat::GaussiansView& map, const splat::Rg
   return record;
 }
 
-Eigen::Isometry3d FrameTracker::motion_over(double seconds) const {
-  if (last_poses_.size() < 2) return Eigen::Isometry3d::Identity();
+std::optional<FrameTracker::LastMotion> FrameTracker::last_motion() const {
+  if (last_poses_.size() < 2) return std::nullopt;
   const double step = last_times_.back() - last_times_.front();
-  if (!(step > 0)) return Eigen::Isometry3d::Identity();
-  return splat::se3_exp(seconds / step * splat::se3_log(last_poses_.front().inverse() * last_poses_.back()));
+  if (!(step > 0)) return std::nullopt;
+  return LastMotion{last_poses_.front().inverse() * last_poses_.back(), step};
+}
+
+Eigen::Isometry3d FrameTracker::motion_over(double seconds) const {
+  const std::optional<LastMotion> m = last_motion();
+  if (!m) return Eigen::Isometry3d::Identity();
+  return splat::se3_exp(seconds / m->step * splat::se3_log(m->motion));
 }
 
 Eigen::Matrix<double, 6, 1> FrameTracker::twist() const {
-  if (last_poses_.size() < 2) return Eigen::Matrix<double, 6, 1>::Zero();
-  const double step = last_times_.back() - last_times_.front();
-  if (!(step > 0)) return Eigen::Matrix<double, 6, 1>::Zero();
-  return splat::se3_log(last_poses_.front().inverse() * last_poses_.back()) / step;
+  const std::optional<LastMotion> m = last_motion();
+  if (!m) return Eigen::Matrix<double, 6, 1>::Zero();
+  return splat::se3_log(m->motion) / m->step;
 }
 
 Eigen::Vector3d FrameTracker::angular_velocity() const {
-  if (last_poses_.size() < 2) return Eigen::Vector3d::Zero();
-  const double step = last_times_.back() - last_times_.front();
-  if (!(step > 0)) return Eigen::Vector3d::Zero();
-  const Eigen::AngleAxisd turn((last_poses_.front().inverse() * last_poses_.back()).linear());
-  return turn.axis() * (turn.angle() / step);
+  const std::optional<LastMotion> m = last_motion();
+  if (!m) return Eigen::Vector3d::Zero();
+  const Eigen::AngleAxisd turn(m->motion.linear());
+  return turn.axis() * (turn.angle() / m->step);
 }
 
 bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_world_reference,
@@ -202,16 +213,17 @@ bool FrameTracker::align(const Reference& reference, const Eigen::Isometry3d& T_
   tracking::OdometryConfig odometry = odometry_config();
   odometry.depth_weight =
       tracking::blur_aware_depth_weight(odometry, *last_prepared_, angular_velocity().norm(), reference.angular_rate);
+  const Eigen::Matrix<double, 6, 1> last_twist = twist();
   tracking::OdometryResult r = tracking::align_rgbd(
-      *reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry, {reference.twist, twist()});
-  frame_twist_ = twist();
+      *reference.frame, *last_prepared_, guess.inverse() * T_world_reference, odometry, {reference.twist, last_twist});
+  frame_twist_ = last_twist;
   const double dt = last_times_.empty() ? 0 : last_prepared_->timestamp() - last_times_.back();
   if (odometry.rolling_shutter > 0 && r.converged && dt > 0 && last_poses_.size() == 2) {
     // The rows' instants need the velocity at this frame: the last two velocities (centred half
     // a frame and a frame and a half back) extrapolated to it, and the frame aligned again.
     const Eigen::Matrix<double, 6, 1> back =
         splat::se3_log(last_poses_.back().inverse() * (T_world_reference * r.T_cur_ref.inverse())) / dt;
-    frame_twist_ = back + 0.5 * (back - twist());
+    frame_twist_ = back + 0.5 * (back - last_twist);
     r = tracking::align_rgbd(*reference.frame, *last_prepared_, r.T_cur_ref, odometry, {reference.twist, frame_twist_});
   }
   record.T_world_cam = T_world_reference * r.T_cur_ref.inverse();

@@ -148,6 +148,13 @@ class FrameTracker {
   // The camera's motion over `seconds` at the velocity of the last two tracked poses,
   // T_cam(t)^-1 T_cam(t + seconds); the identity before there are two.
   Eigen::Isometry3d motion_over(double seconds) const;
+  // The relative pose between the last two tracked poses and the seconds between them; none
+  // before there are two, or when they share a time.
+  struct LastMotion {
+    Eigen::Isometry3d motion;
+    double step;
+  };
+  std::optional<LastMotion> last_motion() const;
   // The camera's angular velocity (rad/s, camera axes) over the last two tracked poses; zero
   // before there are two.
   Eigen::Vector3d angular_velocity() const;
