@@ -122,6 +122,7 @@ FrameTracker::State tracker_from_json(const json& j, std::uint64_t& label_pixels
                         j.at("residual_spreads").get<std::vector<double>>(),
                         j.at("exposure_samples").get<std::vector<std::array<double, 2>>>(),
                         {},
+                        {},
                         {}};
   // Checkpoints written before the moving regions were kept have neither (nothing left out).
   if (j.contains("reference_labels"))

@@ -434,7 +434,8 @@ FrameTracker::State FrameTracker::state() const {
           {residual_spreads_.begin(), residual_spreads_.end()},
           exposure_.samples(),
           {},
-          moving_};
+          moving_,
+          {}};
   for (const Reference& r : references_) {
     s.references.push_back(r.keyframe);
     s.reference_rates.push_back(r.angular_rate);

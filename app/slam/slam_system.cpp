@@ -360,6 +360,7 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
                         record.T_world_cam,
                         keyframe_world_.size(),
                         {},
+                        {},
                         {}};
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
@@ -475,7 +476,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     if (u.keyframe + 1 != keyframe_frame.size() || s.mapper_keyframes.empty() || s.mapper_keyframes.back() != u.keyframe) {
       inconsistent("the unpublished keyframe " + std::to_string(u.keyframe) + " is not the newest one mapped");
     }
-    KeyframeJob job{mapped_keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}};
+    KeyframeJob job{mapped_keyframe(u.keyframe), s.keyframe_world[u.keyframe], u.keyframe, {}, {}, {}};
     with_tracking_reference(job);
     unpublished = std::make_unique<InFlight>(InFlight{std::move(job), {}, std::make_pair(u.stats, u.optimize_ms)});
   }
