@@ -1,7 +1,8 @@
 // Tracking cost per frame on the real sequences in ../shared/data, one thread: the SLAM system's
 // frame tracker (odometry against the reference keyframe, moving regions, recovery), keyframes
 // as it chooses them, no mapping. Prints a table: median and p95 time per frame, the tracking
-// alone's ATE, failures, frames where moving regions were found.
+// alone's ATE, failures, frames where moving regions were found, and the median of the depth
+// residuals' spread (units of the sensor's noise: how well the camera model fits the frames).
 //   tracking_bench [--config slam.json] [--frames N]
 #include <algorithm>
 #include <chrono>
@@ -46,11 +47,11 @@ int main(int argc, char** argv) {
       {"TUM fr3/teddy", "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy"},
       {"7-Scenes redkitchen", "sevenscenes_redkitchen_first200"},
   };
-  std::printf("| sequence | frames | median ms | p95 ms | odometry ATE | failures | frames with moving regions |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("| sequence | frames | median ms | p95 ms | odometry ATE | failures | frames with moving regions | median depth residual spread |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Sequence& s : sequences) {
     if (!std::filesystem::exists(root / s.path)) {
-      std::printf("| %s | skipped: %s not found | | | | | |\n", s.name, (root / s.path).c_str());
+      std::printf("| %s | skipped: %s not found | | | | | | |\n", s.name, (root / s.path).c_str());
       continue;
     }
     app::DatasetOptions options;
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
     const app::Dataset dataset = app::open_dataset(root / s.path, options);
     std::vector<splat::RgbdFrame> frames;  // loaded first: reading PNGs is not tracking
     for (std::size_t i = 0; i < dataset.entries.size(); ++i) frames.push_back(dataset.load(i));
-    std::vector<double> total_ms;
+    std::vector<double> total_ms, spreads;
     std::vector<app::StampedPose> estimate, truth;
     // The SLAM system's own tracker (app/slam/frame_tracker.h), keyframes as it chooses them;
     // the map is never rendered by the odometry front end.
@@ -84,12 +85,14 @@ int main(int argc, char** argv) {
       total_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
       failures += record.tracked ? 0 : 1;
       moving_frames += record.moving_share > 0;
+      if (record.tracked && i > 0) spreads.push_back(record.residual_spread);
       estimate.push_back({frames[i].timestamp, record.T_world_cam});
       if (dataset.entries[i].T_world_cam_truth) truth.push_back({frames[i].timestamp, *dataset.entries[i].T_world_cam_truth});
     }
     const app::TrajectoryErrors e = app::evaluate_trajectory(estimate, truth);
-    std::printf("| %s | %zu | %.1f | %.1f | %.2f cm | %d | %zu |\n", s.name, frames.size(), percentile(total_ms, 0.5),
-                percentile(total_ms, 0.95), e.ate_rmse * 100, failures, moving_frames);
+    std::printf("| %s | %zu | %.1f | %.1f | %.2f cm | %d | %zu | %.3f |\n", s.name, frames.size(),
+                percentile(total_ms, 0.5), percentile(total_ms, 0.95), e.ate_rmse * 100, failures, moving_frames,
+                percentile(spreads, 0.5));
   }
   return 0;
 }

@@ -93,17 +93,27 @@ std::size_t SlamSystem::frame_of_keyframe(std::size_t keyframe) const {
   return frames_.size();  // the keyframe being processed: its frame is the next one
 }
 
-void SlamSystem::apply_tracker_correction() {
+void SlamSystem::apply_tracker_correction(bool frame_begins) {
   Eigen::Isometry3d correction;
   {
     std::lock_guard lock(mutex_);
     correction = tracker_correction_;
     tracker_correction_ = Eigen::Isometry3d::Identity();
+    tracking_frame_ = frame_begins;
+    keyframes_as_tracked_.reset();
   }
   const double* c = correction.matrix().data();
   bool identity = true;
   for (int k = 0; k < 16; ++k) identity = identity && c[k] == (k % 5 == 0 ? 1.0 : 0.0);
   if (!identity) tracker_.correct(correction);  // no loop closed: the poses stay bit for bit
+}
+
+const Eigen::Isometry3d& SlamSystem::keyframe_as_tracked(std::size_t keyframe) const {
+  return keyframes_as_tracked_ ? (*keyframes_as_tracked_)[keyframe] : keyframe_world_[keyframe];
+}
+
+void SlamSystem::keep_keyframes_as_tracked() {
+  if (tracking_frame_ && !keyframes_as_tracked_) keyframes_as_tracked_ = keyframe_world_;
 }
 
 namespace {
@@ -141,6 +151,7 @@ void SlamSystem::close_loops(const KeyframeJob& job) {
 std::vector<Eigen::Isometry3d> SlamSystem::move_keyframes(const std::vector<Eigen::Isometry3d>& before,
                                                           const std::vector<Eigen::Isometry3d>& solved) {
   // Keyframes tracking added while the graph was solved (threaded) follow the last solved one.
+  keep_keyframes_as_tracked();
   std::vector<Eigen::Isometry3d> correction(keyframe_world_.size());
   for (std::size_t k = 0; k < keyframe_world_.size(); ++k) {
     correction[k] = k < before.size() ? solved[k] * before[k].inverse() : correction[before.size() - 1];
@@ -211,6 +222,7 @@ double SlamSystem::publish_keyframe(const KeyframeJob& job, const mapping::Mappi
   const auto poses = mapper_.keyframe_poses();
   const double ms = optimize_ms + ms_since(start);
   std::lock_guard lock(mutex_);
+  keep_keyframes_as_tracked();
   for (const auto& [number, T_cam_world] : poses) keyframe_world_[mapper_keyframes_[number]] = T_cam_world.inverse();
   map_ = std::move(snapshot);
   ++totals_.keyframes_mapped;
@@ -280,7 +292,7 @@ splat::RgbdFrame for_mapping(splat::RgbdFrame input, const splat::RgbdFrame* syn
 
 FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
   rethrow_mapping_error();
-  apply_tracker_correction();
+  apply_tracker_correction(true);
   // Depth taken apart from its colour image is moved to the colour's instant where tracking
   // found the camera's velocity (FrameRecord::T_colour_depth): else at a turn of 2 rad/s,
   // 15 ms apart, depth and colour disagree by 2 degrees.
@@ -310,7 +322,7 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
     const splat::Gaussians& map = *snapshot;
     record = tracker_.track(map, input, [this](std::size_t k) {
       std::lock_guard lock(mutex_);
-      return keyframe_world_[k];
+      return keyframe_as_tracked(k);
     });
     synced = tracker_.depth_moved_frame();
     if (!record.tracked && !held_out && config_.loop_closure.enabled && config_.front_end == "odometry") {
@@ -332,7 +344,7 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
       if (found) {
         {
           std::lock_guard lock(mutex_);
-          record.T_world_cam = splat::orthonormalized(keyframe_world_[found->keyframe] * found->T_keyframe_frame);
+          record.T_world_cam = splat::orthonormalized(keyframe_as_tracked(found->keyframe) * found->T_keyframe_frame);
           record.reason = "relocalized against the keyframe of frame " + std::to_string(frame_of_keyframe(found->keyframe));
         }
         record.tracked = record.relocalized = true;
@@ -353,23 +365,31 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
                                                                            tracker_.moving_factor())
                                                     : MovingMask{};
   std::optional<KeyframeJob> job;
+  // Threaded, mapping may have moved the keyframes while this frame was tracked against them:
+  // the frame then moves as a keyframe added before would have (tracking's motion model follows
+  // at the next frame).
+  std::optional<Eigen::Isometry3d> moved_since;
+  Eigen::Isometry3d T_keyframe_frame = Eigen::Isometry3d::Identity();
   {
     std::lock_guard lock(mutex_);
+    if (keyframes_as_tracked_) moved_since = tracker_correction_;
+    const Eigen::Isometry3d T_world_cam =
+        moved_since ? splat::orthonormalized(*moved_since * record.T_world_cam) : record.T_world_cam;
     if (record.keyframe) {
-      job = KeyframeJob{for_mapping(std::move(input), synced),
-                        record.T_world_cam,
-                        keyframe_world_.size(),
-                        {},
-                        {},
-                        {}};
+      job = KeyframeJob{for_mapping(std::move(input), synced), T_world_cam, keyframe_world_.size(), {}, {}, {}};
       moving.apply(job->frame);
       if (record.reference != FrameRecord::kNoReference && record.reference < keyframe_world_.size()) {
         // The odometry edge: this keyframe as measured from its reference.
         back_end_.add_odometry_edge(record.reference, keyframe_world_.size(),
-                                    keyframe_world_[record.reference].inverse() * record.T_world_cam, record.information);
+                                    keyframe_as_tracked(record.reference).inverse() * record.T_world_cam,
+                                    record.information);
       }
-      keyframe_world_.push_back(record.T_world_cam);
+      keyframe_world_.push_back(T_world_cam);
+    } else {
+      T_keyframe_frame = keyframe_as_tracked(keyframe_world_.size() - 1).inverse() * record.T_world_cam;
     }
+    tracking_frame_ = false;
+    keyframes_as_tracked_.reset();
   }
   if (job && job->keyframe > 0) tracker_.keyframe_added(record, job->keyframe);
   if (job) with_tracking_reference(*job);
@@ -407,9 +427,8 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
   }
   std::lock_guard lock(mutex_);
   const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
-  // Relative to the keyframe as known now (sequential: after mapping moved it).
-  frames_.push_back({keyframe, record.keyframe ? Eigen::Isometry3d::Identity() : keyframe_world_[keyframe].inverse() * record.T_world_cam,
-                     record.tracked, record.keyframe, held_out, moving, record.T_colour_depth});
+  frames_.push_back({keyframe, T_keyframe_frame, record.tracked, record.keyframe, held_out, moving, record.T_colour_depth});
+  if (moved_since) record.T_world_cam = splat::orthonormalized(*moved_since * record.T_world_cam);
   record.held_out = held_out;
   record.gaussians = map_->size();
   return record;
@@ -512,6 +531,7 @@ void SlamSystem::mapping_loop() {
       if (stop_ && !pending_) return;
       job = std::move(*pending_);
       pending_.reset();
+      job.T_world_cam = keyframe_world_[job.keyframe];  // as loops have moved it while it waited
       busy_ = true;
     }
     try {

@@ -220,8 +220,16 @@ class SlamSystem {
   std::vector<Eigen::Isometry3d> move_keyframes(const std::vector<Eigen::Isometry3d>& before,
                                                 const std::vector<Eigen::Isometry3d>& solved);
   std::size_t frame_of_keyframe(std::size_t keyframe) const;  // caller holds mutex_
-  // Applies a correction the mapping thread left for tracking (the caller is tracking).
-  void apply_tracker_correction();
+  // Applies a correction the mapping thread left for tracking (the caller is tracking). With
+  // `frame_begins`, a frame's tracking begins: from here until the frame is added, it is tracked
+  // against the keyframes as they are now, whatever mapping moves meanwhile (keyframe_as_tracked).
+  void apply_tracker_correction(bool frame_begins = false);
+  // A keyframe as the frame being tracked sees it: as it was when its tracking began (the caller
+  // holds mutex_).
+  const Eigen::Isometry3d& keyframe_as_tracked(std::size_t keyframe) const;
+  // Mapping is about to move keyframes (the caller holds mutex_): while a frame is being
+  // tracked, the poses it is tracked against are kept first.
+  void keep_keyframes_as_tracked();
   void mapping_loop();
   void rethrow_mapping_error();
   Eigen::Isometry3d pose_of(const FramePose& frame) const;  // caller holds mutex_
@@ -248,6 +256,10 @@ class SlamSystem {
   MappingTotals totals_;
   std::vector<LoopEvent> loop_events_;
   Eigen::Isometry3d tracker_correction_ = Eigen::Isometry3d::Identity();
+  // Threaded: whether a frame is being tracked, and the keyframes as it is tracked against them
+  // once mapping has moved them since its tracking began (else none kept).
+  bool tracking_frame_ = false;
+  std::optional<std::vector<Eigen::Isometry3d>> keyframes_as_tracked_;
   std::optional<KeyframeJob> pending_;
   std::deque<KeyframeJob> backlog_;  // skipped keyframes, oldest first
   double backlog_mib_ = 0;
