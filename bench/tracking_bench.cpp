@@ -3,9 +3,13 @@
 // as it chooses them, no mapping. Prints a table: median and p95 time per frame, the tracking
 // alone's ATE, failures, frames where moving regions were found, and the median of the depth
 // residuals' spread (units of the sensor's noise: how well the camera model fits the frames).
-//   tracking_bench [--config slam.json] [--frames N]
+//   tracking_bench [--config slam.json] [--frames N] [--dataset DIR] [--per-frame]
+// --dataset tracks that sequence instead (any layout gslam reads, e.g. a generated one);
+// --per-frame also prints a line per frame: its motion's error against the ground truth's,
+// keyframe, lost, moving share and residual spread (where a drift starts).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -36,17 +40,27 @@ double percentile(std::vector<double> v, double q) {
 
 int main(int argc, char** argv) {
   std::filesystem::path config_path;
+  std::filesystem::path dataset_path;
   int max_frames = 0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--config")) config_path = argv[i + 1];
-    if (!std::strcmp(argv[i], "--frames")) max_frames = std::atoi(argv[i + 1]);
+  bool per_frame = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--per-frame")) {
+      per_frame = true;
+      continue;
+    }
+    if (i + 1 >= argc) break;
+    if (!std::strcmp(argv[i], "--config")) config_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--frames")) max_frames = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--dataset")) dataset_path = argv[++i];
   }
   const app::SlamConfig config = app::load_slam_config(config_path);
-  const std::filesystem::path root = GSLAM_SHARED_DATA_DIR;
-  const Sequence sequences[] = {
+  const std::filesystem::path root = dataset_path.empty() ? GSLAM_SHARED_DATA_DIR : dataset_path.parent_path();
+  std::vector<Sequence> sequences = {
       {"TUM fr3/teddy", "tum_rgbd_fr3_teddy_first200/rgbd_dataset_freiburg3_teddy"},
       {"7-Scenes redkitchen", "sevenscenes_redkitchen_first200"},
   };
+  const std::string dataset_name = dataset_path.filename().string();
+  if (!dataset_path.empty()) sequences = {{dataset_name.c_str(), dataset_name.c_str()}};
   std::printf("| sequence | frames | median ms | p95 ms | odometry ATE | failures | frames with moving regions | median depth residual spread |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Sequence& s : sequences) {
@@ -87,7 +101,19 @@ int main(int argc, char** argv) {
       moving_frames += record.moving_share > 0;
       if (record.tracked && i > 0) spreads.push_back(record.residual_spread);
       estimate.push_back({frames[i].timestamp, record.T_world_cam});
-      if (dataset.entries[i].T_world_cam_truth) truth.push_back({frames[i].timestamp, *dataset.entries[i].T_world_cam_truth});
+      const auto& truth_pose = dataset.entries[i].T_world_cam_truth;
+      if (truth_pose) truth.push_back({frames[i].timestamp, *truth_pose});
+      if (per_frame && i > 0 && truth_pose && dataset.entries[i - 1].T_world_cam_truth) {
+        // This frame's motion from the last, against the ground truth's (world frames cancel).
+        const Eigen::Isometry3d moved = estimate[i - 1].T_world_cam.inverse() * record.T_world_cam;
+        const Eigen::Isometry3d truly = dataset.entries[i - 1].T_world_cam_truth->inverse() * *truth_pose;
+        const Eigen::Isometry3d off = truly.inverse() * moved;
+        std::printf("frame %zu: motion off by %.2f cm %.2f deg%s%s, moving %.0f%%, spread %.2f%s%s\n", i,
+                    off.translation().norm() * 100, Eigen::AngleAxisd(off.linear()).angle() * 180 / M_PI,
+                    record.keyframe || tracker.wants_keyframe(record) ? ", keyframe" : "",
+                    record.tracked ? "" : ", lost", 100 * record.moving_share, record.residual_spread,
+                    record.reason.empty() ? "" : ": ", record.reason.c_str());
+      }
     }
     const app::TrajectoryErrors e = app::evaluate_trajectory(estimate, truth);
     std::printf("| %s | %zu | %.1f | %.1f | %.2f cm | %d | %zu | %.3f |\n", s.name, frames.size(),

@@ -338,19 +338,22 @@ int run_cli(int argc, char** argv) {
       "model; TUM fr1: 0.262383,-0.953104,-0.005358,0.002628,1.163314), stated in intrinsics.txt");
   gen_cmd->add_flag("--movers", seq.movers,
                     "People and objects moving through the room: a person walking across, a chair pushed, a crate appearing");
-  gen_cmd->add_flag("--walkers", seq.walkers,
-                    "Two people pacing across the view for the whole sequence, one near the camera "
-                    "(TUM's fr3/walking)");
+  CLI::Option* walkers = gen_cmd->add_flag("--walkers", seq.walkers,
+                                           "Two people pacing across the view for the whole sequence, one near the "
+                                           "camera (TUM's fr3/walking)");
+  gen_cmd->add_flag("--patterned-walkers", seq.patterned_walkers,
+                    "The walkers in patterned shirts, their motion showing all over them (plain: striped along their "
+                    "walk, only their outlines show it)")
+      ->needs(walkers);
   gen_cmd->add_flag("--labels", seq.labels, "Exact class ids per pixel in labels/, with labels/classes.json");
   gen_cmd->add_option("--seed", seq.seed, "Random seed (noise, holes)");
   gen_cmd->callback([gen_cmd, &gen] {
-    for (const char* flag :
-         {"--frames", "--width", "--height", "--laps", "--shake", "--exposure", "--blur-samples",
-          "--depth-noise", "--depth-holes", "--depth-lag", "--gain-swing", "--focal-error",
-          "--distortion", "--movers", "--walkers", "--labels", "--seed"}) {
-      if (gen.suite && gen_cmd->count(flag) > 0)
-        throw CLI::ValidationError(std::string(flag) +
-                                   " describes one sequence; --suite writes its own");
+    if (!gen.suite) return;
+    // Every option but these describes one sequence.
+    for (const CLI::Option* option : gen_cmd->get_options()) {
+      const std::string name = option->get_name();
+      if (name == "--suite" || name == "--overwrite" || name == "--help" || option->get_positional()) continue;
+      if (option->count() > 0) throw CLI::ValidationError(name + " describes one sequence; --suite writes its own");
     }
   });
 

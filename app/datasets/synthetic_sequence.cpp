@@ -157,14 +157,18 @@ class Movers {
     return true;
   }
   // A person (1.78 m, 0.44 m wide) standing at (x, z) on the floor, `walked` metres into their
-  // walk (the stride's bob), in a striped shirt of this colour and dark trousers.
+  // walk (the stride's bob), in a shirt of this colour and dark trousers. The shirt is striped
+  // across, or `patterned` in squares that move with them.
   static void person(const Vector3d& o, const Vector3d& d, double x, double z, double walked,
-                     const Vector3d& shirt, Hit& hit) {
+                     const Vector3d& shirt, Hit& hit, bool patterned = false) {
     const double bob = 0.025 * std::abs(std::sin(walked * M_PI / 0.7));
     const Vector3d lo(x - 0.22, -0.05 + bob, z - 0.13), hi(x + 0.22, 1.5, z + 0.13);
     if (Scene::box(o, d, lo, hi, hit, kPerson)) {
       const double local_y = hit.point.y() - bob;
-      hit.color = local_y < 0.75 ? shirt * (0.75 + 0.25 * checker(local_y, 0, 0.08))
+      // Along the shirt's front and round its sides, from the person's own left.
+      const double across = patterned ? hit.point.x() - x + hit.point.z() - z + 1 : 0;
+      hit.color = local_y < 0.75 ? shirt * (patterned ? 0.6 + 0.4 * checker(local_y, across, 0.08)
+                                                      : 0.75 + 0.25 * checker(local_y, 0, 0.08))
                                  : Vector3d(0.12, 0.14, 0.3);
     }
     Scene::sphere(o, d, Vector3d(x, -0.17 + bob, z), 0.11, hit, 2);
@@ -188,18 +192,19 @@ class Movers {
 // sequence, as in TUM's fr3/walking sequences: one at 1.3 m/s where the movers' person walks, one
 // at 1.1 m/s in the other direction about 0.6 m from the camera, where they fill up to two thirds
 // of the image. Their torsos are flat and evenly striped along their walk, so most of each one's
-// pixels look the same from frame to frame: only their outlines give their motion away.
+// pixels look the same from frame to frame: only their outlines give their motion away (unless
+// SyntheticOptions::patterned_walkers dresses them in patterns that move with them).
 struct Walkers {
   // Pacing over `span` metres from x = `from` at `speed`, starting `start` metres into the walk.
   static double pacing(double seconds, double from, double span, double speed, double start) {
     const double d = std::fmod(seconds * speed + start, 2 * span);
     return from + (d < span ? d : 2 * span - d);
   }
-  static void intersect(const Vector3d& o, const Vector3d& d, double seconds, Hit& hit) {
+  static void intersect(const Vector3d& o, const Vector3d& d, double seconds, bool patterned, Hit& hit) {
     Movers::person(o, d, pacing(seconds, -1.2, 2.2, 1.3, 0), Movers::kPersonZ, 1.3 * seconds,
-                   Vector3d(0.75, 0.2, 0.25), hit);
+                   Vector3d(0.75, 0.2, 0.25), hit, patterned);
     Movers::person(o, d, -pacing(seconds, -1.0, 2.2, 1.1, 1.2), -0.9, 1.1 * seconds,
-                   Vector3d(0.2, 0.6, 0.3), hit);
+                   Vector3d(0.2, 0.6, 0.3), hit, patterned);
   }
 };
 
@@ -207,7 +212,7 @@ void trace(const Scene& scene, const SyntheticOptions& o, const Vector3d& origin
            double seconds, Hit& hit) {
   scene.intersect(origin, direction, hit);
   if (o.movers) Movers::intersect(origin, direction, seconds, hit);
-  if (o.walkers) Walkers::intersect(origin, direction, seconds, hit);
+  if (o.walkers) Walkers::intersect(origin, direction, seconds, o.patterned_walkers, hit);
 }
 
 // Camera to world at `eye` looking at `target`, image rows level (world y is down).

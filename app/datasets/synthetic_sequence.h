@@ -62,6 +62,9 @@ struct SyntheticOptions {
   // People walking through the whole sequence (for the arc path): two pacing to and fro across the
   // view, one near the camera, together often covering most of the image (see Walkers in the .cpp).
   bool walkers = false;
+  // The walkers in patterned shirts, as most clothes are, rather than in stripes along their
+  // walk: their motion then shows all over them, not only at their outlines.
+  bool patterned_walkers = false;
   // Exact per-pixel class ids in labels/ (16-bit PNG, the colour images' names) with
   // labels/classes.json, which gslam then reads as the sequence's label images.
   bool labels = false;

@@ -92,6 +92,9 @@ std::vector<SyntheticCase> hard_case_suite() {
       "300 frames, two people pacing across the view throughout, one 0.6 m from the camera; Kinect "
       "noise",
       o);
+
+  o.patterned_walkers = true;
+  add("walkers_patterned", "walkers in patterned shirts: their motion shows all over them, not only at their outlines", o);
   return suite;
 }
 

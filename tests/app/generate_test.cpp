@@ -64,6 +64,9 @@ TEST(CliGenerate, RefusesAFolderInUseAndOptionsTheSuiteSetsItself) {
   const RunResult suite = run_gslam("generate " + (dir / "suite").string() + " --suite --frames 3");
   EXPECT_NE(suite.exit_code, 0);
   EXPECT_EQ(suite.output, "error: gslam generate: --frames describes one sequence; --suite writes its own\n");
+  const RunResult rolling = run_gslam("generate " + (dir / "suite").string() + " --suite --rolling-shutter 0.03");
+  EXPECT_NE(rolling.exit_code, 0) << "every option of one sequence is refused, the newest too";
+  EXPECT_EQ(rolling.output, "error: gslam generate: --rolling-shutter describes one sequence; --suite writes its own\n");
   EXPECT_FALSE(std::filesystem::exists(dir / "suite"));
 }
 
@@ -91,7 +94,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
   std::set<std::string> names;
   bool fast = false, blur = false, holes = false, loop = false, miscalibrated = false,
        long_one = false, moving = false, walking = false, unsynced = false, exposure = false,
-       lens = false, unregistered = false, rolling = false;
+       lens = false, unregistered = false, rolling = false, patterned = false;
   for (const app::SyntheticCase& c : suite) {
     EXPECT_TRUE(names.insert(c.name).second) << c.name;
     fast |= c.options.shake_peak_rate >= 2;
@@ -102,6 +105,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     long_one |= c.options.frames >= 700;
     moving |= c.options.movers && !c.options.labels;  // found without a model, not from labels
     walking |= c.options.walkers && !c.options.labels;
+    patterned |= c.options.walkers && c.options.patterned_walkers;
     unsynced |= c.options.depth_lag > 0;
     exposure |= c.options.gain_swing > 0;
     lens |= c.options.distortion.any();
@@ -109,7 +113,7 @@ TEST(SyntheticSuite, CoversTheHardCases) {
     rolling |= c.options.rolling_shutter > 0;
   }
   EXPECT_TRUE(fast && blur && holes && loop && miscalibrated && long_one && moving && walking &&
-              unsynced && exposure && lens && unregistered && rolling);
+              unsynced && exposure && lens && unregistered && rolling && patterned);
 }
 
 }  // namespace
