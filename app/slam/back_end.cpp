@@ -249,7 +249,8 @@ BackEnd::State BackEnd::state() const {
 }
 
 void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::size_t>& mapped,
-                      const std::function<splat::RgbdFrame(std::size_t)>& keyframe) {
+                      const std::function<splat::RgbdFrame(std::size_t)>& keyframe,
+                      const std::function<splat::RgbdFrame(std::size_t)>& mapped_keyframe) {
   auto inconsistent = [](const std::string& what) { throw splat::Error("SlamSystem::restore: " + what); };
   for (const auto* edges : {&s.edges, &s.rejected_loops}) {
     for (const tracking::PoseGraphEdge& e : *edges) {
@@ -270,7 +271,7 @@ void BackEnd::restore(State s, std::size_t keyframes, const std::vector<std::siz
   {
     std::lock_guard lock(places_mutex_);
     for (std::size_t k : mapped) {
-      const splat::RgbdFrame frame = keyframe(k);
+      const splat::RgbdFrame frame = mapped_keyframe(k);
       places_.add(k, tracking::extract_place_features(frame, config_.loop_closure.places));
       thumbnails_.emplace_back(k, thumbnail(frame));
     }

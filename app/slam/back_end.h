@@ -79,10 +79,13 @@ class BackEnd {
   };
   State state() const;
   // Continues from `state` on a back end that has seen nothing: `keyframe(number)` gives a
-  // keyframe's frame, and `mapped` lists the keyframes mapping has (they rejoin the places).
-  // Throws splat::Error on a state that does not hold together with `keyframes` keyframes.
+  // keyframe's frame, `mapped_keyframe(number)` the same as mapping had it (its moving regions
+  // ignored, as close_loop() saw it), and `mapped` lists the keyframes mapping has (they rejoin
+  // the places). Throws splat::Error on a state that does not hold together with `keyframes`
+  // keyframes.
   void restore(State state, std::size_t keyframes, const std::vector<std::size_t>& mapped,
-               const std::function<splat::RgbdFrame(std::size_t)>& keyframe);
+               const std::function<splat::RgbdFrame(std::size_t)>& keyframe,
+               const std::function<splat::RgbdFrame(std::size_t)>& mapped_keyframe);
 
  private:
   splat::RgbdFrame thumbnail(const splat::RgbdFrame& frame) const;  // at dense_width

@@ -488,7 +488,7 @@ void SlamSystem::restore(State s, const std::function<splat::RgbdFrame(std::size
     return frame;
   };
   tracker_.restore(s.tracker, keyframe);
-  back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe);
+  back_end_.restore(std::move(s.back_end), keyframe_frame.size(), s.mapper_keyframes, keyframe, mapped_keyframe);
   std::unique_ptr<InFlight> unpublished;
   if (s.unpublished) {  // the newest keyframe, as process() handed it to mapping
     const State::Unpublished& u = *s.unpublished;

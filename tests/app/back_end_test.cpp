@@ -112,3 +112,46 @@ TEST(BackEnd, CovisibleSolveTheSameWhateverTrackingAddedSince) {
 }
 
 }  // namespace
+
+namespace {
+
+// A resumed run's back end rebuilds its places from the keyframes as mapping had them, moving
+// regions ignored as close_loop() saw them: it then closes the same loop as the run that never
+// stopped (the places' thumbnails carry the frames' ignored pixels into their dense alignment).
+TEST(BackEnd, RestoredPlacesCloseTheLoopTheRunThatNeverStoppedCloses) {
+  const Sequence sequence;
+  const app::SlamConfig config;
+  const std::size_t loop_keyframe = static_cast<std::size_t>(config.loop_closure.min_separation) + 1;
+  std::vector<Eigen::Isometry3d> poses;
+  for (std::size_t k = 0; k < loop_keyframe; ++k) poses.push_back(sequence.truth(k));
+  poses.push_back(shifted(sequence.truth(0), {0.02, 0, 0}));
+  // The keyframes as mapping has them: a moving region over the left third of each.
+  const auto mapped_keyframe = [&](std::size_t k) {
+    splat::RgbdFrame frame = sequence.dataset.load(k);
+    frame.ignore.assign(frame.depth.size(), 0);
+    for (int y = 0; y < frame.height(); ++y)
+      for (int x = 0; x < frame.width() / 3; ++x) frame.ignore[static_cast<std::size_t>(y) * frame.width() + x] = 2;
+    return frame;
+  };
+  app::BackEnd never_stopped(config), resumed(config);
+  add_chain(never_stopped, poses);
+  std::vector<std::size_t> mapped;
+  for (std::size_t k = 0; k < loop_keyframe; ++k) {
+    const std::vector<Eigen::Isometry3d> earlier(poses.begin(), poses.begin() + static_cast<long>(k) + 1);
+    EXPECT_FALSE(never_stopped.close_loop(mapped_keyframe(k), k, earlier)) << "keyframe " << k;
+    mapped.push_back(k);
+  }
+  resumed.restore(never_stopped.state(), loop_keyframe + 1, mapped,
+                  [&](std::size_t k) { return sequence.dataset.load(k); }, mapped_keyframe);
+  const std::optional<app::BackEnd::Loop> a = never_stopped.close_loop(mapped_keyframe(0), loop_keyframe, poses);
+  const std::optional<app::BackEnd::Loop> b = resumed.close_loop(mapped_keyframe(0), loop_keyframe, poses);
+  ASSERT_TRUE(a && b) << "the view of keyframe 0 seen again closes no loop";
+  EXPECT_TRUE(a->accepted);
+  EXPECT_EQ(a->matched_keyframe, b->matched_keyframe);
+  EXPECT_EQ(a->inliers, b->inliers);
+  EXPECT_EQ(a->drift_m, b->drift_m);
+  ASSERT_EQ(a->solved.size(), b->solved.size());
+  expect_same_poses(a->solved, b->solved);
+}
+
+}  // namespace
