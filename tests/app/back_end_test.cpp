@@ -46,18 +46,26 @@ struct Sequence {
     dataset = gslam::test::synthetic_dataset(dir / "seq", o);
   }
   Eigen::Isometry3d truth(std::size_t i) const { return *dataset.entries[i].T_world_cam_truth; }
+  // Keyframes 0 .. loop_keyframe() - 1 on frames 0, 1, ...; then the loop keyframe, which sees
+  // frame 0 again, placed 2 cm off by drift.
+  static std::size_t loop_keyframe(const app::SlamConfig& config) {
+    return static_cast<std::size_t>(config.loop_closure.min_separation) + 1;
+  }
+  std::vector<Eigen::Isometry3d> up_to_loop(const app::SlamConfig& config) const {
+    std::vector<Eigen::Isometry3d> poses;
+    for (std::size_t k = 0; k < loop_keyframe(config); ++k) poses.push_back(truth(k));
+    poses.push_back(shifted(truth(0), {0.02, 0, 0}));
+    return poses;
+  }
 };
 
 TEST(BackEnd, LoopSolvedTheSameWhateverTrackingAddedSince) {
   const Sequence sequence;
   const app::SlamConfig config;
-  const std::size_t loop_keyframe = static_cast<std::size_t>(config.loop_closure.min_separation) + 1;
-  // Keyframes 0 .. loop_keyframe - 1 on frames 0, 1, ...; the loop keyframe sees frame 0 again,
-  // placed 2 cm off by drift; two more keyframes follow it.
-  std::vector<Eigen::Isometry3d> poses;
-  for (std::size_t k = 0; k < loop_keyframe; ++k) poses.push_back(sequence.truth(k));
-  poses.push_back(shifted(sequence.truth(0), {0.02, 0, 0}));
-  const std::vector<Eigen::Isometry3d> up_to_loop = poses;
+  const std::size_t loop_keyframe = Sequence::loop_keyframe(config);
+  // Two more keyframes follow the loop's.
+  const std::vector<Eigen::Isometry3d> up_to_loop = sequence.up_to_loop(config);
+  std::vector<Eigen::Isometry3d> poses = up_to_loop;
   poses.push_back(shifted(sequence.truth(1), {0.02, 0, 0}));
   poses.push_back(shifted(sequence.truth(2), {0.02, 0, 0}));
 
@@ -121,10 +129,8 @@ namespace {
 TEST(BackEnd, RestoredPlacesCloseTheLoopTheRunThatNeverStoppedCloses) {
   const Sequence sequence;
   const app::SlamConfig config;
-  const std::size_t loop_keyframe = static_cast<std::size_t>(config.loop_closure.min_separation) + 1;
-  std::vector<Eigen::Isometry3d> poses;
-  for (std::size_t k = 0; k < loop_keyframe; ++k) poses.push_back(sequence.truth(k));
-  poses.push_back(shifted(sequence.truth(0), {0.02, 0, 0}));
+  const std::size_t loop_keyframe = Sequence::loop_keyframe(config);
+  const std::vector<Eigen::Isometry3d> poses = sequence.up_to_loop(config);
   // The keyframes as mapping has them: a moving region over the left third of each.
   const auto mapped_keyframe = [&](std::size_t k) {
     splat::RgbdFrame frame = sequence.dataset.load(k);
