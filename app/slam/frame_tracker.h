@@ -201,14 +201,14 @@ class FrameTracker {
   mutable Eigen::Matrix<double, 6, 1> frame_twist_ = Eigen::Matrix<double, 6, 1>::Zero();
 };
 
+// A keyframe's velocity (PreparedKeyframe::twist) as checkpoints keep it.
+std::array<double, 6> twist_array(const Eigen::Matrix<double, 6, 1>& twist);
+
 // Keyframes as tracking prepared them, restored from a checkpoint: keyframe numbers[k], taken at
 // angular rate rates[k] and velocity twists[k], with labels[k] left out (`labels` or `twists`
 // empty: a checkpoint from before they were kept, none left out, zero). Throws splat::Error naming
 // `what` on lists of different lengths, a velocity that is not finite or labels that do not fit
 // their keyframe.
-// A keyframe's velocity (PreparedKeyframe::twist) as checkpoints keep it.
-std::array<double, 6> twist_array(const Eigen::Matrix<double, 6, 1>& twist);
-
 std::deque<FrameTracker::PreparedKeyframe> restore_prepared_keyframes(
     const std::vector<std::size_t>& numbers, const std::vector<double>& rates,
     const std::vector<std::vector<uint8_t>>& labels, const std::vector<std::array<double, 6>>& twists,

@@ -368,13 +368,10 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
   // Threaded, mapping may have moved the keyframes while this frame was tracked against them:
   // the frame then moves as a keyframe added before would have (tracking's motion model follows
   // at the next frame).
-  std::optional<Eigen::Isometry3d> moved_since;
-  Eigen::Isometry3d T_keyframe_frame = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_cam = record.T_world_cam, T_keyframe_frame = Eigen::Isometry3d::Identity();
   {
     std::lock_guard lock(mutex_);
-    if (keyframes_as_tracked_) moved_since = tracker_correction_;
-    const Eigen::Isometry3d T_world_cam =
-        moved_since ? splat::orthonormalized(*moved_since * record.T_world_cam) : record.T_world_cam;
+    if (keyframes_as_tracked_) T_world_cam = splat::orthonormalized(tracker_correction_ * record.T_world_cam);
     if (record.keyframe) {
       job = KeyframeJob{for_mapping(std::move(input), synced), T_world_cam, keyframe_world_.size(), {}, {}, {}};
       moving.apply(job->frame);
@@ -428,7 +425,7 @@ FrameRecord SlamSystem::process(splat::RgbdFrame input, bool held_out) {
   std::lock_guard lock(mutex_);
   const std::size_t keyframe = keyframe_world_.size() - 1;  // this frame, or the last keyframe before it
   frames_.push_back({keyframe, T_keyframe_frame, record.tracked, record.keyframe, held_out, moving, record.T_colour_depth});
-  if (moved_since) record.T_world_cam = splat::orthonormalized(*moved_since * record.T_world_cam);
+  record.T_world_cam = T_world_cam;  // tracking's own poses follow at the next frame
   record.held_out = held_out;
   record.gaussians = map_->size();
   return record;
